@@ -1,0 +1,263 @@
+"""Shape-finding: the configuration in which the catenary hangs exactly as designed (SPEC 3.3).
+
+Unknowns are the nodal coordinates and the reference (unstretched) lengths of all elements;
+equations are static equilibrium under gravity plus the design constraints:
+
+* every node's x is prescribed (supports, droppers, stitch-wire ends, and the mesh points between
+  them); the reference length of each element is the unknown that lets the node stand there;
+* the contact-wire height is prescribed at every dropper (the dropper's length is the unknown) and
+  at the supports (the steady arm carries the reaction); the messenger height is prescribed at the
+  supports (the support spring carries the reaction);
+* each wire is pulled at its first node by its tension T along x; the x-equilibrium of every node
+  then makes the horizontal component of the wire force equal to T in every element (the droppers
+  are vertical). Imposing the full force norm T in every element, as the tension constraint is
+  sometimes written, over-determines a sagging wire under gravity (the force grows with the slope);
+  the horizontal component is the one that equilibrium keeps constant.
+* each stitch wire's horizontal tension is imposed by one extra equation.
+
+The coupled system is solved by Newton–Raphson with the analytic tangent (assembled in
+:mod:`catenary_env.assembly`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .assembly import assemble
+from .design import GRAVITY
+from .layout import CONTACT, MESSENGER, STITCH, Layout
+
+
+class ShapeFindingError(RuntimeError):
+    """Shape-finding did not converge; the message gives the residual."""
+
+
+@dataclass(frozen=True)
+class StaticSolution:
+    """The static equilibrium configuration of a section.
+
+    Attributes
+    ----------
+    layout : Layout
+    positions : ndarray (n_dofs,)
+        Nodal coordinates at equilibrium, m.
+    lengths : ndarray (Ec + Eb,)
+        Reference (unstretched) lengths, cables first then bars, m.
+    bar_forces : ndarray (Eb,)
+        Static axial forces of bars (droppers, stitch wires), N.
+    reactions : ndarray (n_dofs,)
+        Forces the supports and anchors exert where an equation was replaced by a prescribed
+        coordinate (support springs, steady arms, wire anchors), N; zero elsewhere.
+    residual_history : tuple of float
+        Infinity norm of the equilibrium residual at each Newton iteration, N.
+    load_scale : float
+        Largest wire tension, N; residuals are judged relative to it.
+    """
+
+    layout: Layout
+    positions: np.ndarray
+    lengths: np.ndarray
+    bar_forces: np.ndarray
+    reactions: np.ndarray
+    residual_history: tuple[float, ...]
+    load_scale: float
+
+    @property
+    def dropper_forces(self) -> np.ndarray:
+        """Static dropper forces, N, in the layout's dropper order."""
+        return self.bar_forces[self.layout.dropper_bars]
+
+    @property
+    def dropper_lengths(self) -> np.ndarray:
+        """Unstretched dropper lengths, m."""
+        n_c = self.layout.cable_nodes.shape[0]
+        return self.lengths[n_c + self.layout.dropper_bars]
+
+    def infeasibility(self) -> str:
+        """Why the design is statically infeasible, or an empty string (SPEC 3.3)."""
+        lengths = self.dropper_lengths
+        forces = self.dropper_forces
+        lay = self.layout
+        if np.min(lengths) <= 0.0:
+            i = int(np.argmin(lengths))
+            return (f"static: dropper {lay.dropper_index[i] + 1} of span {lay.dropper_span[i] + 1} needs a "
+                    f"negative length ({lengths[i]:.4f} m)")
+        if np.min(forces) < 0.0:
+            i = int(np.argmin(forces))
+            return (f"static: dropper {lay.dropper_index[i] + 1} of span {lay.dropper_span[i] + 1} is in "
+                    f"compression ({forces[i]:.2f} N)")
+        return ""
+
+
+@dataclass(frozen=True)
+class _System:
+    """Which coordinates are unknown and which equations are kept."""
+
+    free: np.ndarray  # indices of unknown coordinates
+    rows: np.ndarray  # indices of kept equilibrium equations
+    prescribed: np.ndarray  # coordinate values (used where not free)
+    external: np.ndarray  # applied end tensions, N
+
+
+def _system(layout: Layout) -> _System:
+    c = layout.catenary
+    n = layout.n_dofs
+    prescribed = np.zeros(n)
+    fixed = np.zeros(n, dtype=bool)
+    dropped = np.zeros(n, dtype=bool)
+    xd = layout.node_dof
+    prescribed[xd] = layout.node_x
+    fixed[xd] = True
+    for nodes, height in ((layout.messenger_supports, c.messenger_height),
+                          (layout.contact_supports, c.contact_wire_height)):
+        prescribed[xd[nodes] + 1] = height
+        fixed[xd[nodes] + 1] = True
+        dropped[xd[nodes] + 1] = True
+    cw_drop = layout.bar_nodes[layout.dropper_bars, 1]
+    prescribed[xd[cw_drop] + 1] = layout.dropper_height
+    fixed[xd[cw_drop] + 1] = True
+    external = np.zeros(n)
+    for wire, (first, last) in zip((c.contact_wire, c.messenger_wire), layout.wire_ends, strict=True):
+        external[xd[first]] = -wire.tension
+        external[xd[last]] = wire.tension
+        # The anchor at the last node takes the x-reaction: that equation is implied by the others.
+        dropped[xd[last]] = True
+    return _System(np.flatnonzero(~fixed), np.flatnonzero(~dropped), prescribed, external)
+
+
+def initial_guess(layout: Layout) -> tuple[np.ndarray, np.ndarray]:
+    """Coordinates and reference lengths to start Newton from: parabolic wires, straight bars."""
+    c = layout.catenary
+    L = layout.span_length
+    X = _system(layout).prescribed.copy()
+    xd = layout.node_dof
+    x = layout.node_x
+    xi = (x % L) / L
+    w = (c.messenger_wire.linear_mass + c.contact_wire.linear_mass) * GRAVITY
+    sag = w * L**2 / (8.0 * c.messenger_wire.tension)
+    mw_z = c.messenger_height - 4.0 * sag * xi * (1.0 - xi)
+    kind = layout.node_kind
+    mw = kind == MESSENGER
+    X[xd[mw] + 1] = mw_z[mw]
+    X[xd[kind == STITCH] + 1] = mw_z[kind == STITCH] - 0.15
+    # Contact wire: straight lines between its prescribed heights.
+    cw_drop = layout.bar_nodes[layout.dropper_bars, 1]
+    known = np.r_[layout.contact_supports, cw_drop]
+    order = np.argsort(x[known])
+    heights = np.r_[np.full(layout.contact_supports.size, c.contact_wire_height), layout.dropper_height]
+    cw = kind == CONTACT
+    X[xd[cw] + 1] = np.interp(x[cw], x[known][order], heights[order])
+    for wire_kind, wire in ((CONTACT, c.contact_wire), (MESSENGER, c.messenger_wire)):
+        nodes = np.flatnonzero(kind == wire_kind)
+        stretch = 1.0 + wire.tension / wire.axial_stiffness
+        X[xd[nodes] + 2] = stretch
+        X[xd[nodes] + 3] = stretch * np.gradient(X[xd[nodes] + 1], x[nodes])
+    n_c = layout.cable_nodes.shape[0]
+    ends = layout.cable_nodes
+    chord = np.hypot(X[xd[ends[:, 1]]] - X[xd[ends[:, 0]]], X[xd[ends[:, 1]] + 1] - X[xd[ends[:, 0]] + 1])
+    tension = np.where(layout.cable_wire == CONTACT, c.contact_wire.tension, c.messenger_wire.tension)
+    lengths = np.empty(n_c + layout.bar_nodes.shape[0])
+    lengths[:n_c] = chord / (1.0 + tension / layout.cable_axial_stiffness)
+    bends = layout.bar_nodes
+    bar_len = np.hypot(X[xd[bends[:, 1]]] - X[xd[bends[:, 0]]], X[xd[bends[:, 1]] + 1] - X[xd[bends[:, 0]] + 1])
+    lengths[n_c:] = bar_len * (1.0 - 1e-3)
+    return X, lengths
+
+
+def _stitch_equations(layout: Layout, X: np.ndarray, lengths: np.ndarray) -> tuple[np.ndarray, sp.csr_matrix]:
+    """Residual (horizontal force of each stitch wire's first bar minus its tension) and its gradient."""
+    from .bar import bar_state
+
+    bars = layout.stitch_bars[:, 0]
+    n_s = bars.size
+    n_c = layout.cable_nodes.shape[0]
+    n_unknown_len = lengths.size
+    if n_s == 0:
+        return np.zeros(0), sp.csr_matrix((0, layout.n_dofs + n_unknown_len))
+    dofs = layout.bar_dofs()[bars]
+    bs = bar_state(X[dofs], lengths[n_c + bars], layout.bar_stiffness[bars], layout.bar_axial_stiffness[bars])
+    # The force on the bar's far end along x is N n_x, the horizontal tension.
+    residual = bs.force[:, 2] - layout.catenary.stitch_wire.tension
+    rows = np.repeat(np.arange(n_s), 5)
+    cols = np.c_[dofs, layout.n_dofs + n_c + bars].ravel()
+    vals = np.c_[bs.stiffness[:, 2, :], bs.force_dlength[:, 2]].ravel()
+    grad = sp.csr_matrix((vals, (rows, cols)), shape=(n_s, layout.n_dofs + n_unknown_len))
+    return residual, grad
+
+
+def find_shape(layout: Layout, tolerance: float = 1e-11, max_iterations: int = 30) -> StaticSolution:
+    """Solve the shape-finding problem of ``layout`` by Newton–Raphson.
+
+    Parameters
+    ----------
+    tolerance : float
+        Convergence when the infinity norm of the residual is below ``tolerance`` times the
+        largest wire tension, or when it stalls at round-off below 1e-8 times that tension.
+
+    Raises
+    ------
+    ShapeFindingError
+        When Newton does not reach the tolerance; the message gives the residual.
+    """
+    c = layout.catenary
+    system = _system(layout)
+    X, lengths = initial_guess(layout)
+    scale = max(c.contact_wire.tension, c.messenger_wire.tension)
+    history: list[float] = []
+    n = layout.n_dofs
+
+    def residual(X: np.ndarray, lengths: np.ndarray, jacobian: bool):
+        state = assemble(layout, X, lengths, tangent=jacobian, dlength=jacobian)
+        r_eq = (state.force - system.external)[system.rows]
+        r_st, g_st = _stitch_equations(layout, X, lengths)
+        r = np.r_[r_eq, r_st]
+        if not jacobian:
+            return r, None
+        full = sp.hstack([state.stiffness, state.dlength]).tocsr()[system.rows]
+        J = sp.vstack([full, g_st]).tocsc()
+        cols = np.r_[system.free, n + np.arange(lengths.size)]
+        return r, J[:, cols]
+
+    r, J = residual(X, lengths, True)
+    for _ in range(max_iterations):
+        norm = float(np.max(np.abs(r)))
+        history.append(norm)
+        if norm < tolerance * scale:
+            break
+        # Round-off floor: once below 1e-8 of the scale, a step that no longer halves the residual
+        # means double precision is exhausted (about 1e-9 of the tension here).
+        if len(history) > 1 and norm < 1e-8 * scale and norm > 0.5 * history[-2]:
+            break
+        try:
+            step = spla.spsolve(J, -r)
+        except RuntimeError as error:  # singular factor
+            raise ShapeFindingError(f"shape-finding failed: singular tangent ({error}); residual {norm:.3e} N") from None
+        # Backtrack when a full step raises the residual (far from the solution only).
+        factor = 1.0
+        for _ in range(8):
+            X_new = X.copy()
+            X_new[system.free] += factor * step[: system.free.size]
+            lengths_new = lengths + factor * step[system.free.size:]
+            if np.all(lengths_new > 0.0) or factor < 0.01:
+                r_new, _ = residual(X_new, lengths_new, False)
+                if np.all(np.isfinite(r_new)) and np.max(np.abs(r_new)) < max(norm, 1e-300) * 1.5:
+                    break
+            factor *= 0.5
+        X, lengths = X_new, lengths_new
+        r, J = residual(X, lengths, True)
+    else:
+        norm = float(np.max(np.abs(r)))
+        history.append(norm)
+        if not norm < 1e-8 * scale:
+            raise ShapeFindingError(
+                f"shape-finding did not converge in {max_iterations} Newton iterations: residual {norm:.3e} N "
+                f"({norm / scale:.1e} of the largest tension {scale:g} N)"
+            )
+    state = assemble(layout, X, lengths, tangent=False)
+    reactions = system.external - state.force
+    reactions[system.rows] = 0.0
+    return StaticSolution(layout, X, lengths, state.bar_force, reactions, tuple(history), scale)
