@@ -8,11 +8,18 @@ solve.
 
 from __future__ import annotations
 
+import math
+import time
 from dataclasses import dataclass
 
 from .definition import CatenaryDefinition, PantographDefinition
-from .design import Design
-from .statistics import ContactStatistics
+from .design import Design, DesignError, check_design, check_speed
+from .dynamics import simulate_passage
+from .layout import build_layout
+from .linear_system import LinearSystem, linearise
+from .newmark import Trajectory
+from .shape_finding import ShapeFindingError, StaticSolution, find_shape
+from .statistics import ContactStatistics, contact_statistics
 
 
 @dataclass(frozen=True)
@@ -81,6 +88,118 @@ class Evaluation:
     wall_time: float
 
 
+@dataclass(frozen=True)
+class Simulation:
+    """Everything one simulation computed, for plots and analysis.
+
+    Attributes
+    ----------
+    static : StaticSolution
+    system : LinearSystem
+    trajectory : Trajectory
+    statistics : ContactStatistics
+    window : (float, float)
+        Analysis section along the track, m.
+    uplift_force : float
+        N.
+    """
+
+    static: StaticSolution
+    system: LinearSystem
+    trajectory: Trajectory
+    statistics: ContactStatistics
+    window: tuple[float, float]
+    uplift_force: float
+
+
+def analysis_window(catenary: CatenaryDefinition, fidelity: Fidelity) -> tuple[float, float]:
+    """Start and end of the central ``analysis_spans`` spans, m."""
+    first = (fidelity.n_spans - fidelity.analysis_spans) // 2
+    return first * catenary.span_length, (first + fidelity.analysis_spans) * catenary.span_length
+
+
+def check_fidelity(catenary: CatenaryDefinition, fidelity: Fidelity) -> None:
+    """Refuse a fidelity outside the model's range, naming the field."""
+    f = fidelity
+    if not (isinstance(f.n_spans, int) and 3 <= f.n_spans <= 200):
+        raise DesignError(f"fidelity.n_spans = {f.n_spans!r}: must be an integer in [3, 200]")
+    if not (isinstance(f.analysis_spans, int) and 1 <= f.analysis_spans <= f.n_spans - 2):
+        raise DesignError(f"fidelity.analysis_spans = {f.analysis_spans!r}: must be an integer in [1, n_spans - 2]")
+    for name in ("contact_wire_element", "messenger_wire_element"):
+        value = getattr(f, name)
+        if not (0.05 <= value <= 0.5 * catenary.span_length):
+            raise DesignError(f"fidelity.{name} = {value!r}: must lie in [0.05, {0.5 * catenary.span_length}] m")
+    if not (1e-5 <= f.time_step <= 0.01):
+        raise DesignError(f"fidelity.time_step = {f.time_step!r}: must lie in [1e-5, 0.01] s")
+
+
+def solve_static(catenary: CatenaryDefinition, design: Design, fidelity: Fidelity) -> StaticSolution:
+    """Check the design and find its static shape (raises ShapeFindingError if Newton fails)."""
+    check_design(catenary, design)
+    check_fidelity(catenary, fidelity)
+    layout = build_layout(catenary, design, fidelity.n_spans, fidelity.contact_wire_element,
+                          fidelity.messenger_wire_element)
+    return find_shape(layout)
+
+
+def _uplift(pantograph: PantographDefinition, uplift_force: float | None) -> float:
+    force = pantograph.uplift_force if uplift_force is None else uplift_force
+    if force is None:
+        raise DesignError(
+            f"uplift_force: pantograph '{pantograph.name}' sets none; give one (N > 0) or calibrate it to a "
+            "target mean contact force with calibrate_uplift"
+        )
+    if not (math.isfinite(force) and force > 0.0):
+        raise DesignError(f"uplift_force = {force!r}: must be a finite number > 0 N")
+    return force
+
+
+def simulate_static(
+    static: StaticSolution,
+    pantograph: PantographDefinition,
+    speed: float,
+    fidelity: Fidelity,
+    uplift_force: float,
+    system: LinearSystem | None = None,
+) -> Simulation:
+    """Dynamic passage over a solved static state (the design must be statically feasible)."""
+    catenary = static.layout.catenary
+    system = linearise(static) if system is None else system
+    trajectory = simulate_passage(system, pantograph, uplift_force, speed, fidelity.time_step)
+    window = analysis_window(catenary, fidelity)
+    stats = contact_statistics(trajectory.position, trajectory.contact_force, fidelity.time_step, window,
+                               trajectory.support_x, trajectory.support_uplift)
+    return Simulation(static, system, trajectory, stats, window, uplift_force)
+
+
+def simulate(
+    catenary: CatenaryDefinition,
+    pantograph: PantographDefinition,
+    design: Design,
+    speed: float,
+    fidelity: Fidelity,
+    uplift_force: float | None = None,
+) -> Simulation:
+    """Shape-finding, linearisation and the pantograph passage at ``speed`` (m/s).
+
+    Raises
+    ------
+    DesignError
+        Invalid design, speed, fidelity or uplift force (before any solve).
+    ShapeFindingError
+        Shape-finding did not converge.
+    ValueError
+        The design is statically infeasible (a dropper in compression or of negative length).
+    """
+    check_speed(catenary, speed)
+    force = _uplift(pantograph, uplift_force)
+    static = solve_static(catenary, design, fidelity)
+    reason = static.infeasibility()
+    if reason:
+        raise ValueError(f"design is infeasible: {reason}")
+    return simulate_static(static, pantograph, speed, fidelity, force)
+
+
 def evaluate(
     catenary: CatenaryDefinition,
     pantograph: PantographDefinition,
@@ -89,8 +208,35 @@ def evaluate(
     fidelity: Fidelity,
     uplift_force: float | None = None,
 ) -> Evaluation:
-    """Simulate one design at one speed (m/s) and return its feasibility and statistics."""
-    raise NotImplementedError
+    """Simulate one design at one speed (m/s) and return its feasibility and statistics.
+
+    Bad input raises :class:`DesignError` before any solve; an infeasible design (static: compressed
+    dropper, negative dropper length, or a shape-finding that does not converge; dynamic: contact
+    loss in the analysis section) returns ``feasible=False`` with the reason.
+    """
+    start = time.perf_counter()
+    check_speed(catenary, speed)
+    force = _uplift(pantograph, uplift_force)
+    check_design(catenary, design)
+    try:
+        static = solve_static(catenary, design, fidelity)
+    except ShapeFindingError as error:
+        return Evaluation(False, f"static: {error}", None, (), (), force, time.perf_counter() - start)
+    lengths, forces = _central_span(static, design)
+    reason = static.infeasibility()
+    if reason:
+        return Evaluation(False, reason, None, lengths, forces, force, time.perf_counter() - start)
+    stats = simulate_static(static, pantograph, speed, fidelity, force).statistics
+    if stats.contact_loss_percent > 0.0:
+        reason = f"dynamic: contact lost {stats.contact_loss_percent:.3f} % of the time in the analysis section"
+    return Evaluation(not reason, reason, stats, lengths, forces, force, time.perf_counter() - start)
+
+
+def _central_span(static: StaticSolution, design: Design) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    lay = static.layout
+    central = lay.dropper_span == lay.n_spans // 2
+    return (tuple(float(v) for v in static.dropper_lengths[central]),
+            tuple(float(v) for v in static.dropper_forces[central]))
 
 
 def calibrate_uplift(
@@ -100,9 +246,40 @@ def calibrate_uplift(
     speed: float,
     fidelity: Fidelity,
     target_mean: float,
+    tolerance: float = 0.01,
 ) -> float:
-    """The static uplift force (N) for which the mean contact force of ``design`` equals ``target_mean`` (N)."""
-    raise NotImplementedError
+    """The static uplift force (N) for which the mean contact force of ``design`` equals ``target_mean`` (N).
+
+    The mean force is nearly affine in the uplift (the frame spring takes a part), so a secant
+    iteration from ``target_mean`` converges in two or three passages; the static solution and the
+    linear system are computed once.
+
+    Parameters
+    ----------
+    tolerance : float
+        Accepted error of the mean contact force, N.
+    """
+    check_speed(catenary, speed)
+    if not (math.isfinite(target_mean) and target_mean > 0.0):
+        raise DesignError(f"target_mean = {target_mean!r}: must be a finite number > 0 N")
+    static = solve_static(catenary, design, fidelity)
+    reason = static.infeasibility()
+    if reason:
+        raise ValueError(f"cannot calibrate the uplift on an infeasible design: {reason}")
+    system = linearise(static)
+
+    def mean_force(uplift: float) -> float:
+        return simulate_static(static, pantograph, speed, fidelity, uplift, system).statistics.mean
+
+    x0, f0 = target_mean, mean_force(target_mean) - target_mean
+    x1 = x0 - f0
+    for _ in range(8):
+        f1 = mean_force(x1) - target_mean
+        if abs(f1) < tolerance:
+            return x1
+        slope = (f1 - f0) / (x1 - x0) if x1 != x0 else 1.0
+        x0, f0, x1 = x1, f1, x1 - f1 / slope
+    raise RuntimeError(f"uplift calibration did not reach {tolerance} N: last error {f1:.3f} N at {x1:.2f} N")
 
 
 def en50367_mean_force(speed: float) -> float:

@@ -1,0 +1,357 @@
+"""The Gymnasium environment of a catenary design problem: one action is one whole design (SPEC 5)."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import OrderedDict
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import ArrayLike, NDArray
+
+from ..design import Design, check_speed
+from ..problems import DesignProblem, get_problem, resolve_fidelity
+from ..simulation import Evaluation, Fidelity, en50367_mean_force
+from ..statistics import ContactStatistics
+
+OBJECTIVES = ("sigma", "mean_sigma_over_speeds", "worst_sigma_over_speeds")
+"""Objective names: σ at one speed, the mean of σ over ``speeds_kmh``, the largest σ over ``speeds_kmh``."""
+
+INFEASIBLE_SIGMA_OVER_MEAN = 1.0
+"""An infeasible design scores as if σ equalled the EN 50367 mean force Fm (σ / Fm = 1).
+
+That is more than three times the EN 50367 quality limit σ / Fm < 0.3: a design that keeps contact
+(the only feasible kind) cannot come near it, since Fm - 3σ would be -2 Fm.
+"""
+
+MEMO_SIZE = 1024
+"""Evaluations an env keeps, keyed by design on its grid and speed: a repeated design is not re-simulated."""
+
+_STATISTICS = tuple(ContactStatistics.__dataclass_fields__)
+
+
+class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
+    """
+    ## Description
+
+    The design of a railway catenary (overhead contact line) for fast, smooth current collection,
+    posed as one decision: the action is the whole geometry of a span (contact-wire heights at the
+    droppers, or dropper positions, or both), the catenary is built and a pantograph runs under it in a
+    finite-element simulation, and the reward is minus the standard deviation σ of the 20 Hz filtered
+    contact force over the central spans (SPEC 4). Each problem has its own env,
+    `Catenary-<problem>-v0`; every span is equal and symmetric, so one variable sets a dropper and its
+    mirror. The pantograph's uplift force is set once per speed, on the problem's reference design (the
+    level contact wire on the preset's droppers), so that its mean contact force equals the EN 50367
+    target (157.3 N at 300 km/h); every design is simulated with that force.
+
+    ## Action Space
+
+    A `ndarray` of shape `(n_variables,)`, dtype float32, in `[-1, 1]`: action `a_i` maps affinely to
+    variable `x_i = lower_i + (a_i + 1) / 2 (upper_i - lower_i)`, which is then rounded to the problem's
+    grid (heights 1 mm, positions 1 cm; ties round up). `a = -1` is the lower bound, `a = 1` the upper.
+    Values outside `[-1, 1]` are clipped and `info["clipped"]` says so; NaN, infinite values or a wrong
+    shape raise `ValueError`. `s`: pre-sag at mid-span (positive = lower); `dh_i`: contact-wire height
+    change at dropper i (negative = lower); `d_i`: position of dropper i from the span's first support;
+    dropper 1 is next to the support.
+
+    | Problem  | Catenary  | Droppers / span | Variables (m)                    | Bounds (m)                                         |
+    |----------|-----------|-----------------|----------------------------------|----------------------------------------------------|
+    | BPresag  | benchmark | 9               | s                                | [-0.02, 0.10]                                      |
+    | B1       | benchmark | 9               | dh_1 .. dh_5                     | each [-0.02, 0.02]                                 |
+    | B2       | benchmark | 9               | d_1 .. d_4                       | [0.1, 7.4], [7.5, 13.1], [13.2, 18.8], [18.9, 27.4] |
+    | B3       | benchmark | 5               | d_1, d_2, dh_1 .. dh_3           | [0.1, 13.0], [13.1, 27.4]; dh each [-0.02, 0.02]   |
+    | SWPresag | stitched  | 7               | s                                | [-0.02, 0.10]                                      |
+    | SW1      | stitched  | 7               | dh_1 .. dh_4                     | each [-0.02, 0.02]                                 |
+    | SW2      | stitched  | 7               | d_1 .. d_3                       | [0.1, 8.9], [9.1, 20.4], [20.5, 32.4]              |
+    | SW3      | stitched  | 5               | d_1, d_2, dh_1 .. dh_3           | [2, 9], [10, 30]; dh each [-0.02, 0.02]            |
+
+    ## Observation Space
+
+    A `ndarray` of shape `(2,)`, dtype float32: the speeds the design is for, as fractions of the
+    contact wire's wave speed c = sqrt(T / ρA) (459.6 km/h on the benchmark catenary, 509.1 km/h on the
+    stitched one). This ratio governs the dynamics (a catenary is run at v / c ≤ 0.7). The observation
+    is constant within an episode; with `speed_range` it changes from episode to episode, so a policy
+    can be conditioned on the speed.
+
+    | Num | Observation                                        | Min | Max |
+    |-----|----------------------------------------------------|-----|-----|
+    | 0   | lowest speed of the objective / c                  | 0   | 1   |
+    | 1   | highest speed of the objective / c                 | 0   | 1   |
+
+    With `objective="sigma"` both entries are the episode's speed.
+
+    ## Rewards
+
+    *r = -σ* in newtons, σ the standard deviation of the filtered contact force at the episode's speed;
+    with `objective="mean_sigma_over_speeds"` *r = -mean(σ(v))*, with `"worst_sigma_over_speeds"`
+    *r = -max(σ(v))* over `speeds_kmh`. With `normalize_reward=True` the reward is divided by the same
+    objective of the reference design (so the reference scores -1 and a 30 % reduction scores -0.7).
+    An infeasible design (a slack dropper at equilibrium, contact loss, or a geometry the catenary
+    cannot build) scores *r = -Fm* (normalised likewise), Fm the EN 50367 mean force (157.3 N at
+    300 km/h; over several speeds, aggregated like σ): worse than any feasible design.
+
+    ## Starting State
+
+    Nothing is random but the speed: with `speed_range=(lo, hi)` it is drawn at `reset` from
+    `self.np_random`, uniformly on the whole km/h values in `[lo, hi]` (a 1 km/h grid, so that the
+    pantograph calibration of each speed is reused). `reset(options={"speed_kmh": v})` sets it.
+
+    ## Episode End
+
+    Every episode is one step: `terminated=True` after it, `truncated=False`. Vector envs should use
+    `autoreset_mode=gymnasium.vector.AutoresetMode.SAME_STEP`, so that no step is spent on a reset.
+
+    ## Info
+
+    After `step`: `feasible` (bool), `reason` (str, empty when feasible), `variables` (dict of the
+    variables on their grid, m), `design` (the full :class:`~catenary_env.design.Design`), `speed_kmh`,
+    `objective` (the σ value behind the reward, N, before normalisation; the penalty when infeasible),
+    every field of :class:`~catenary_env.statistics.ContactStatistics` (`mean`, `std`, `std_over_mean`,
+    `statistical_max`, `statistical_min`, `actual_max`, `actual_min` in N, `contact_loss_percent` in %,
+    `max_support_uplift` in m; absent when the design was not simulated dynamically),
+    `uplift_force` (N), `dropper_lengths` (m) and `dropper_forces` (N) of a central span,
+    `wall_time` (s, of the simulations behind the result) and `clipped` (bool). With a multi-speed
+    objective, `speed_kmh`, the statistics and `uplift_force` are arrays over `speeds_kmh`.
+
+    ## Arguments
+
+    - `problem`: problem name, one of the table above (set by the registered ID).
+    - `speed_kmh=300.0`: train speed, km/h (unused with a multi-speed objective or `speed_range`).
+    - `speed_range=None`: `(lo, hi)` km/h to draw the speed from at each reset.
+    - `n_spans=None`: spans in the section, overriding the fidelity's (the analysis section shrinks to
+      `n_spans - 2` spans if needed).
+    - `fidelity="study"`: `"study"` (20 spans, statistics on 10, Δt = 1 ms), `"test"` (5 spans, coarse
+      mesh; for tests only) or a :class:`~catenary_env.simulation.Fidelity`.
+    - `objective="sigma"`: or `"mean_sigma_over_speeds"`, `"worst_sigma_over_speeds"` with `speeds_kmh`.
+    - `speeds_kmh=None`: speeds of a multi-speed objective, km/h.
+    - `normalize_reward=False`: divide the reward by the reference design's objective.
+    - `render_mode=None`: or `"rgb_array"`, a picture of the last design (the reference design before
+      the first step) with its statistics.
+
+    ```python
+    >>> import gymnasium as gym
+    >>> from catenary_env.envs import register_envs
+    >>> register_envs()
+    >>> env = gym.make("Catenary-B1-v0", speed_kmh=280.0, fidelity="test")
+    >>> env.action_space
+    Box(-1.0, 1.0, (5,), float32)
+
+    ```
+
+    ## Version History
+
+    * v0: Initial version.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 1}
+
+    def __init__(
+        self,
+        problem: str,
+        speed_kmh: float = 300.0,
+        speed_range: tuple[float, float] | None = None,
+        n_spans: int | None = None,
+        fidelity: str | Fidelity = "study",
+        objective: str = "sigma",
+        speeds_kmh: tuple[float, ...] | None = None,
+        normalize_reward: bool = False,
+        render_mode: str | None = None,
+    ) -> None:
+        self.problem: DesignProblem = get_problem(problem)
+        self.fidelity: Fidelity = resolve_fidelity(fidelity, n_spans)
+        self.objective = objective
+        self.normalize_reward = bool(normalize_reward)
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode = {render_mode!r}: must be None or one of {self.metadata['render_modes']}")
+        self.render_mode = render_mode
+        self._speeds, self._speed_range = self._check_speeds(speed_kmh, speed_range, objective, speeds_kmh)
+        self._wave_speed_kmh = self.problem.catenary_definition.wave_speed * 3.6
+        n = self.problem.n_variables
+        self.action_space = spaces.Box(-1.0, 1.0, (n,), np.float32)
+        self.observation_space = spaces.Box(0.0, 1.0, (2,), np.float32)
+        self.evaluation_count = 0
+        """Designs simulated by this env (memo hits, calibrations and reference runs not counted)."""
+        self._memo: OrderedDict[tuple[tuple[float, ...], float], Evaluation] = OrderedDict()
+        self._reset_done = False
+        self._last: tuple[Design, str, list[str]] | None = None
+
+    # -- Gymnasium API ------------------------------------------------------------------------------------
+
+    def reset(self, *, seed: int | None = None,
+              options: dict[str, Any] | None = None) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        super().reset(seed=seed)
+        if options and "speed_kmh" in options:
+            if self.objective != "sigma":
+                raise ValueError("options['speed_kmh'] is only for objective='sigma'")
+            self._speeds = self._check_speeds(float(options["speed_kmh"]), None, "sigma", None)[0]
+        elif self._speed_range is not None:
+            lo, hi = math.ceil(self._speed_range[0]), math.floor(self._speed_range[1])
+            self._speeds = (float(self.np_random.integers(lo, hi, endpoint=True)),)
+        self._reset_done = True
+        return self._observation(), {"speed_kmh": self._speed_info()}
+
+    def step(self, action: ArrayLike) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
+        if self._speed_range is not None and not self._reset_done:
+            raise gym.error.ResetNeeded("call reset() first: it draws the speed from speed_range")
+        values = self._check_action(action)
+        clipped = bool(np.any(values < -1.0) or np.any(values > 1.0))
+        x = self.action_to_x(values)
+        evaluations = self._evaluate(x)
+        objective, feasible = self._objective(evaluations)
+        reward = -objective / self._reference_objective() if self.normalize_reward else -objective
+        design = self.problem.design(x)
+        info = self._info(x, design, evaluations, objective, feasible, clipped)
+        self._last = (design, f"{self.problem.name} design at {self._speed_text()}", self._summary(info))
+        return self._observation(), float(reward), True, False, info
+
+    def render(self) -> NDArray[np.uint8] | None:
+        if self.render_mode is None:
+            gym.logger.warn("render() without a render_mode: make the env with render_mode='rgb_array'")
+            return None
+        from .rendering import render_design
+
+        if self._last is None:
+            design, title = self.problem.reference_design(), f"{self.problem.name} reference design (level wire)"
+            return render_design(self.problem.catenary_definition, design, title, ["not simulated"])
+        design, title, lines = self._last
+        return render_design(self.problem.catenary_definition, design, title, lines)
+
+    # -- mapping ------------------------------------------------------------------------------------------
+
+    def action_to_x(self, action: ArrayLike) -> NDArray[np.float64]:
+        """The problem's variables (m, on the grid) of an action (clipped to [-1, 1])."""
+        a = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
+        lower, upper = self.problem.lower, self.problem.upper
+        return self.problem.snap(lower + 0.5 * (a + 1.0) * (upper - lower))
+
+    def x_to_action(self, x: ArrayLike) -> NDArray[np.float32]:
+        """The action of variables ``x`` (m, within the bounds): inverse of :meth:`action_to_x` on the grid."""
+        values = self.problem.check_variables(x)
+        lower, upper = self.problem.lower, self.problem.upper
+        return (2.0 * (values - lower) / (upper - lower) - 1.0).astype(np.float32)
+
+    # -- helpers ------------------------------------------------------------------------------------------
+
+    def _check_speeds(self, speed_kmh: float, speed_range: tuple[float, float] | None, objective: str,
+                      speeds_kmh: tuple[float, ...] | None) -> tuple[tuple[float, ...], tuple[float, float] | None]:
+        if objective not in OBJECTIVES:
+            raise ValueError(f"objective = {objective!r}: must be one of {', '.join(OBJECTIVES)}")
+        catenary = self.problem.catenary_definition
+        if objective == "sigma":
+            if speeds_kmh is not None:
+                raise ValueError("speeds_kmh is for the multi-speed objectives; use speed_kmh or speed_range")
+            if speed_range is None:
+                speeds = (float(speed_kmh),)
+            else:
+                lo, hi = (float(v) for v in speed_range)
+                if not (math.floor(hi) >= math.ceil(lo) and lo <= hi):
+                    raise ValueError(f"speed_range = {speed_range!r}: need lo <= hi with a whole km/h value between")
+                speeds = (lo, hi)
+        else:
+            if speed_range is not None:
+                raise ValueError(f"speed_range cannot be combined with objective={objective!r}; give speeds_kmh")
+            if not speeds_kmh:
+                raise ValueError(f"objective={objective!r} needs speeds_kmh, a tuple of speeds in km/h")
+            speeds = tuple(float(v) for v in speeds_kmh)
+        for v in speeds:
+            check_speed(catenary, v / 3.6)  # DesignError (a ValueError) naming the allowed range
+        return (speeds if speed_range is None else (speeds[0],)), (None if speed_range is None else speeds)
+
+    def _check_action(self, action: ArrayLike) -> NDArray[np.float64]:
+        try:
+            values = np.asarray(action, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ValueError(f"action must be an array of {self.problem.n_variables} numbers, got {action!r}") from None
+        if values.shape != self.action_space.shape:
+            raise ValueError(f"action must have shape {self.action_space.shape} ({', '.join(self.problem.variables)}), "
+                             f"got shape {values.shape}")
+        if not np.all(np.isfinite(values)):
+            raise ValueError(f"action must be finite (no NaN or inf), got {values.tolist()}")
+        return values
+
+    def _evaluate(self, x: NDArray[np.float64]) -> list[Evaluation]:
+        evaluations: list[Evaluation] = []
+        for speed in self._speeds:
+            key = (tuple(x.tolist()), speed)
+            if key in self._memo:
+                self._memo.move_to_end(key)
+                evaluation = self._memo[key]
+            else:
+                evaluation = self.problem.evaluate(x, speed, self.fidelity)
+                self.evaluation_count += 1
+                self._memo[key] = evaluation
+                if len(self._memo) > MEMO_SIZE:
+                    self._memo.popitem(last=False)
+            evaluations.append(evaluation)
+            if evaluation.statistics is None:
+                break  # statically infeasible: the statics do not depend on the speed
+        return evaluations
+
+    def _aggregate(self, values: list[float]) -> float:
+        if self.objective == "worst_sigma_over_speeds":
+            return float(np.max(values))
+        return float(np.mean(values))  # one speed, or the mean over speeds
+
+    def _objective(self, evaluations: list[Evaluation]) -> tuple[float, bool]:
+        feasible = len(evaluations) == len(self._speeds) and all(e.feasible for e in evaluations)
+        if feasible:
+            return self._aggregate([e.statistics.std for e in evaluations if e.statistics is not None]), True
+        penalty = [INFEASIBLE_SIGMA_OVER_MEAN * en50367_mean_force(v / 3.6) for v in self._speeds]
+        return self._aggregate(penalty), False
+
+    def _reference_objective(self) -> float:
+        sigmas = []
+        for speed in self._speeds:
+            reference = self.problem.reference_evaluation(speed, self.fidelity)
+            if not reference.feasible or reference.statistics is None:
+                raise RuntimeError(f"reward normalisation: the reference design of {self.problem.name} is infeasible "
+                                   f"at {speed} km/h ({reference.reason})")
+            sigmas.append(reference.statistics.std)
+        return self._aggregate(sigmas)
+
+    def _info(self, x: NDArray[np.float64], design: Design, evaluations: list[Evaluation], objective: float,
+              feasible: bool, clipped: bool) -> dict[str, Any]:
+        single = len(self._speeds) == 1
+        reasons = [e.reason if single else f"at {v:g} km/h: {e.reason}"
+                   for v, e in zip(self._speeds, evaluations, strict=False) if not e.feasible]
+        info: dict[str, Any] = {
+            "feasible": feasible,
+            "reason": "; ".join(reasons),
+            "variables": dict(zip(self.problem.variables, x.tolist(), strict=True)),
+            "design": design,
+            "speed_kmh": self._speed_info(),
+            "objective": objective,
+        }
+        stats = [e.statistics for e in evaluations]
+        if len(stats) == len(self._speeds) and all(s is not None for s in stats):
+            for name in _STATISTICS:
+                column = [float(getattr(s, name)) for s in stats]
+                info[name] = column[0] if single else np.array(column)
+        uplift = [e.uplift_force for e in evaluations]
+        info["uplift_force"] = uplift[0] if single else np.array(uplift + [math.nan] * (len(self._speeds) - len(uplift)))
+        info["dropper_lengths"] = tuple(evaluations[0].dropper_lengths)
+        info["dropper_forces"] = tuple(evaluations[0].dropper_forces)
+        info["wall_time"] = float(sum(e.wall_time for e in evaluations))
+        info["clipped"] = clipped
+        return info
+
+    def _summary(self, info: dict[str, Any]) -> list[str]:
+        lines = [f"feasible: {info['feasible']}" + (f" ({info['reason']})" if info["reason"] else "")]
+        lines.append("variables (m): " + ", ".join(f"{k} = {v:.3f}" for k, v in info["variables"].items()))
+        if "std" in info:
+            lines.append(f"sigma = {np.round(info['std'], 2)} N, Fm = {np.round(info['mean'], 2)} N, "
+                         f"contact loss = {np.round(info['contact_loss_percent'], 2)} %")
+        return lines
+
+    def _observation(self) -> NDArray[np.float32]:
+        speeds = self._speeds
+        return np.array([min(speeds), max(speeds)], dtype=np.float32) / np.float32(self._wave_speed_kmh)
+
+    def _speed_info(self) -> float | NDArray[np.float64]:
+        return self._speeds[0] if len(self._speeds) == 1 else np.array(self._speeds)
+
+    def _speed_text(self) -> str:
+        return ", ".join(f"{v:g}" for v in self._speeds) + " km/h"
