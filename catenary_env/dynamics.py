@@ -13,7 +13,10 @@ active-set iteration (Gregori et al. 2017, "An approach to geometric optimisatio
 catenaries", Veh. Syst. Dyn. 56; the same method for slack droppers).
 
 A slack dropper transmits nothing: λ_d cancels its whole linear force, spring and Rayleigh damping
-share, N₀ + k (1 + β a1) Δl₁ - β k B (a1 u₀ + a4 v₀ + a5 a₀).
+share, N₀ + k (1 + β a1) Δl₁ - β k B (a1 u₀ + a4 v₀ + a5 a₀). A dropper is slack when that force
+would be compressive: judging by the spring force alone while removing the damping share too
+leaves droppers near zero force with no consistent state, whereas this rule makes each step a
+linear complementarity problem with a unique solution.
 """
 
 from __future__ import annotations
@@ -29,7 +32,30 @@ from .newmark import NewmarkConstants, Trajectory, passage_positions
 from .pantograph import pantograph_matrices, static_contact
 from .definition import PantographDefinition
 
-MAX_ACTIVE_SET_ITERATIONS = 30
+MAX_ACTIVE_SET_ITERATIONS = 40
+FULL_SWITCH_ITERATIONS = 8
+
+
+def switch_states(
+    contact: bool, slack: np.ndarray, new_contact: bool, new_slack: np.ndarray, contact_force: float,
+    elastic: np.ndarray, iteration: int,
+) -> tuple[bool, np.ndarray]:
+    """Next contact / slack-dropper state of the active-set iteration.
+
+    The first iterations switch every inconsistent state at once (Newton's method on the
+    piecewise-linear problem, quadratic when it works); should that cycle, later iterations switch
+    only the most violated one, which cannot cycle on this problem's P-matrix.
+    """
+    if iteration < FULL_SWITCH_ITERATIONS:
+        return new_contact, new_slack
+    violation = np.where(new_slack != slack, np.abs(elastic), 0.0)
+    contact_violation = abs(contact_force) if new_contact != contact else 0.0
+    if contact_violation >= violation.max(initial=0.0):
+        return new_contact, slack
+    slack = slack.copy()
+    worst = int(np.argmax(violation))
+    slack[worst] = not slack[worst]
+    return contact, slack
 
 
 class BandedCholesky:
@@ -58,6 +84,7 @@ def simulate_passage(
     uplift_force: float,
     speed: float,
     time_step: float,
+    n_steps: int | None = None,
 ) -> Trajectory:
     """Pantograph passage over the whole section at constant ``speed`` (m/s), fast method.
 
@@ -67,6 +94,8 @@ def simulate_passage(
         Static uplift force on the pantograph's bottom mass, N.
     time_step : float
         Newmark step, s.
+    n_steps : int, optional
+        Stop after this many steps (the whole section by default).
     """
     lay = system.static.layout
     cat = lay.catenary
@@ -89,6 +118,8 @@ def simulate_passage(
     load_p[0] = uplift_force
 
     time, position = passage_positions(lay.n_spans * lay.span_length, speed, time_step)
+    if n_steps is not None:
+        time, position = time[:n_steps], position[:n_steps]
     n_steps = time.size
     element, shape, wire_z = system.contact_wire.locate(position)
     wire_z = wire_z - cat.contact_wire_height  # static height above nominal
@@ -141,7 +172,7 @@ def simulate_passage(
         dl_known = B @ u_known
         rate_term = beta * rate * (B @ (nm.a1 * u + nm.a4 * v + nm.a5 * a))
 
-        for _ in range(MAX_ACTIVE_SET_ITERATIONS):
+        for iteration in range(MAX_ACTIVE_SET_ITERATIONS):
             idx = np.flatnonzero(slack)
             m = idx.size
             A = np.eye(1 + m)
@@ -157,13 +188,13 @@ def simulate_passage(
             sol = np.linalg.solve(A, r) if m else r / A[0, 0]
             f, lam = sol[0], sol[1:]
             dl = dl_known + g_dc * f + G[:, idx] @ lam
-            elastic = N0 + rate * dl
+            elastic = N0 + kappa * dl - rate_term  # spring plus damping share
             gap = gap_known - c_cc * f - g_dc[idx] @ lam
             new_contact = bool(gap > 0.0)
             new_slack = elastic < 0.0
             if new_contact == contact and np.array_equal(new_slack, slack):
                 break
-            contact, slack = new_contact, new_slack
+            contact, slack = switch_states(contact, slack, new_contact, new_slack, kh * gap, elastic, iteration)
         else:
             unresolved += 1
 

@@ -15,6 +15,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .definition import PantographDefinition
+from .dynamics import MAX_ACTIVE_SET_ITERATIONS, switch_states
 from .linear_system import LinearSystem
 from .newmark import NewmarkConstants, Trajectory, passage_positions
 from .pantograph import pantograph_matrices, static_contact
@@ -78,7 +79,7 @@ def simulate_passage_reference(
         N_row[system.contact_wire.z_dofs[element[k]]] = shape[k]
         N_row[n + head] = -1.0  # N_row · U = wire uplift - head height
         velocity_part = B @ (nm.a1 * U[:n] + nm.a4 * V[:n] + nm.a5 * A[:n])
-        for _ in range(60):
+        for iteration in range(MAX_ACTIVE_SET_ITERATIONS):
             matrix = base.copy()
             r = rhs.copy()
             if contact:
@@ -93,11 +94,12 @@ def simulate_passage_reference(
                 r[:n] += Bs.T @ (N0[slack] - beta * rate[slack] * velocity_part[slack])
             U_new = spla.spsolve(matrix.tocsc(), r)
             gap = -(N_row @ U_new) - wire_z[k]
-            elastic = N0 + rate * (B @ U_new[:n])
+            elongation = B @ U_new[:n]
+            elastic = N0 + rate * ((1.0 + beta * nm.a1) * elongation - beta * velocity_part)
             new_contact, new_slack = bool(gap > 0.0), elastic < 0.0
             if new_contact == contact and np.array_equal(new_slack, slack):
                 break
-            contact, slack = new_contact, new_slack
+            contact, slack = switch_states(contact, slack, new_contact, new_slack, kh * gap, elastic, iteration)
         else:
             unresolved += 1
         V, A = nm.update(U, V, A, U_new)

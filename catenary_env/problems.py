@@ -379,8 +379,9 @@ def register_problem(problem: DesignProblem) -> DesignProblem:
 def get_problem(name: str) -> DesignProblem:
     """The registered problem called ``name``; raises KeyError naming the problems available."""
     if name not in PROBLEMS:
-        close = difflib.get_close_matches(name, list(PROBLEMS), n=1)
-        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        by_lower = {known.lower(): known for known in PROBLEMS}
+        close = difflib.get_close_matches(str(name).lower(), list(by_lower), n=1)
+        hint = f" (did you mean {by_lower[close[0]]!r}?)" if close else ""
         raise KeyError(f"unknown design problem {name!r}{hint}; available: {', '.join(PROBLEMS)}")
     return PROBLEMS[name]
 

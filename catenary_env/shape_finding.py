@@ -189,6 +189,37 @@ def _stitch_equations(layout: Layout, X: np.ndarray, lengths: np.ndarray) -> tup
     return residual, grad
 
 
+class ShapeEquations:
+    """The shape-finding system R(y) = 0 over the unknowns y = (free coordinates, reference lengths)."""
+
+    def __init__(self, layout: Layout) -> None:
+        self.layout = layout
+        self.system = _system(layout)
+        self.n_free = self.system.free.size
+
+    def unknowns(self, X: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+        return np.r_[X[self.system.free], lengths]
+
+    def split(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        X = self.system.prescribed.copy()
+        X[self.system.free] = y[: self.n_free]
+        return X, y[self.n_free:]
+
+    def evaluate(self, y: np.ndarray, jacobian: bool = True) -> tuple[np.ndarray, sp.csc_matrix | None]:
+        """Residual (N) and, optionally, its analytic Jacobian with respect to y."""
+        X, lengths = self.split(y)
+        lay, system = self.layout, self.system
+        state = assemble(lay, X, lengths, tangent=jacobian, dlength=jacobian)
+        r_st, g_st = _stitch_equations(lay, X, lengths)
+        r = np.r_[(state.force - system.external)[system.rows], r_st]
+        if not jacobian:
+            return r, None
+        full = sp.hstack([state.stiffness, state.dlength]).tocsr()[system.rows]
+        J = sp.vstack([full, g_st]).tocsc()
+        cols = np.r_[system.free, lay.n_dofs + np.arange(lengths.size)]
+        return r, J[:, cols]
+
+
 def find_shape(layout: Layout, tolerance: float = 1e-11, max_iterations: int = 30) -> StaticSolution:
     """Solve the shape-finding problem of ``layout`` by Newton–Raphson.
 
@@ -204,33 +235,21 @@ def find_shape(layout: Layout, tolerance: float = 1e-11, max_iterations: int = 3
         When Newton does not reach the tolerance; the message gives the residual.
     """
     c = layout.catenary
-    system = _system(layout)
-    X, lengths = initial_guess(layout)
+    equations = ShapeEquations(layout)
+    y = equations.unknowns(*initial_guess(layout))
+    n_free = equations.n_free
     scale = max(c.contact_wire.tension, c.messenger_wire.tension)
     history: list[float] = []
-    n = layout.n_dofs
-
-    def residual(X: np.ndarray, lengths: np.ndarray, jacobian: bool):
-        state = assemble(layout, X, lengths, tangent=jacobian, dlength=jacobian)
-        r_eq = (state.force - system.external)[system.rows]
-        r_st, g_st = _stitch_equations(layout, X, lengths)
-        r = np.r_[r_eq, r_st]
-        if not jacobian:
-            return r, None
-        full = sp.hstack([state.stiffness, state.dlength]).tocsr()[system.rows]
-        J = sp.vstack([full, g_st]).tocsc()
-        cols = np.r_[system.free, n + np.arange(lengths.size)]
-        return r, J[:, cols]
-
-    r, J = residual(X, lengths, True)
+    r, J = equations.evaluate(y)
+    converged = False
     for _ in range(max_iterations):
         norm = float(np.max(np.abs(r)))
         history.append(norm)
-        if norm < tolerance * scale:
-            break
         # Round-off floor: once below 1e-8 of the scale, a step that no longer halves the residual
         # means double precision is exhausted (about 1e-9 of the tension here).
-        if len(history) > 1 and norm < 1e-8 * scale and norm > 0.5 * history[-2]:
+        stalled = len(history) > 1 and norm < 1e-8 * scale and norm > 0.5 * history[-2]
+        if norm < tolerance * scale or stalled:
+            converged = True
             break
         try:
             step = spla.spsolve(J, -r)
@@ -239,17 +258,15 @@ def find_shape(layout: Layout, tolerance: float = 1e-11, max_iterations: int = 3
         # Backtrack when a full step raises the residual (far from the solution only).
         factor = 1.0
         for _ in range(8):
-            X_new = X.copy()
-            X_new[system.free] += factor * step[: system.free.size]
-            lengths_new = lengths + factor * step[system.free.size:]
-            if np.all(lengths_new > 0.0) or factor < 0.01:
-                r_new, _ = residual(X_new, lengths_new, False)
-                if np.all(np.isfinite(r_new)) and np.max(np.abs(r_new)) < max(norm, 1e-300) * 1.5:
+            y_new = y + factor * step
+            if np.all(y_new[n_free:] > 0.0) or factor < 0.01:
+                r_new, _ = equations.evaluate(y_new, jacobian=False)
+                if np.all(np.isfinite(r_new)) and np.max(np.abs(r_new)) < 1.5 * norm:
                     break
             factor *= 0.5
-        X, lengths = X_new, lengths_new
-        r, J = residual(X, lengths, True)
-    else:
+        y = y_new
+        r, J = equations.evaluate(y)
+    if not converged:
         norm = float(np.max(np.abs(r)))
         history.append(norm)
         if not norm < 1e-8 * scale:
@@ -257,7 +274,8 @@ def find_shape(layout: Layout, tolerance: float = 1e-11, max_iterations: int = 3
                 f"shape-finding did not converge in {max_iterations} Newton iterations: residual {norm:.3e} N "
                 f"({norm / scale:.1e} of the largest tension {scale:g} N)"
             )
+    X, lengths = equations.split(y)
     state = assemble(layout, X, lengths, tangent=False)
-    reactions = system.external - state.force
-    reactions[system.rows] = 0.0
+    reactions = state.force - equations.system.external
+    reactions[equations.system.rows] = 0.0
     return StaticSolution(layout, X, lengths, state.bar_force, reactions, tuple(history), scale)

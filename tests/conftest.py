@@ -1,0 +1,37 @@
+"""Shared fixtures: short sections and coarse meshes, so that the physics tests stay fast."""
+
+from __future__ import annotations
+
+import pytest
+
+from catenary_env.design import level_design
+from catenary_env.presets import load_catenary, load_pantograph
+from catenary_env.shape_finding import StaticSolution
+from catenary_env.simulation import Fidelity, solve_static
+
+SHORT = Fidelity(n_spans=5, analysis_spans=1, contact_wire_element=1.0, messenger_wire_element=2.0, time_step=2e-3)
+
+
+@pytest.fixture(scope="session")
+def benchmark_catenary():
+    return load_catenary("benchmark")
+
+
+@pytest.fixture(scope="session")
+def stitched_catenary():
+    return load_catenary("stitched")
+
+
+@pytest.fixture(scope="session")
+def benchmark_pantograph_definition():
+    return load_pantograph("benchmark")
+
+
+@pytest.fixture(scope="session")
+def benchmark_static(benchmark_catenary) -> StaticSolution:
+    return solve_static(benchmark_catenary, level_design(benchmark_catenary), SHORT)
+
+
+@pytest.fixture(scope="session")
+def stitched_static(stitched_catenary) -> StaticSolution:
+    return solve_static(stitched_catenary, level_design(stitched_catenary), SHORT)
