@@ -21,6 +21,8 @@ linear complementarity problem with a unique solution.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
@@ -85,6 +87,7 @@ def simulate_passage(
     speed: float,
     time_step: float,
     n_steps: int | None = None,
+    progress: Callable[[float], None] | None = None,
 ) -> Trajectory:
     """Pantograph passage over the whole section at constant ``speed`` (m/s), fast method.
 
@@ -96,6 +99,8 @@ def simulate_passage(
         Newmark step, s.
     n_steps : int, optional
         Stop after this many steps (the whole section by default).
+    progress : callable, optional
+        Called with the fraction done, about a hundred times.
     """
     lay = system.static.layout
     cat = lay.catenary
@@ -150,8 +155,11 @@ def simulate_passage(
     current_element = -1
     c1, c2, c3 = nm.a0 + alpha * nm.a1, nm.a2 + alpha * nm.a4, nm.a3 + alpha * nm.a5
     d1, d2, d3 = beta * nm.a1, beta * nm.a4, beta * nm.a5
+    report_every = max(1, n_steps // 100)
 
     for k in range(1, n_steps):
+        if progress is not None and k % report_every == 0:
+            progress(k / n_steps)
         rhs = M @ (c1 * u + c2 * v + c3 * a) + K @ (d1 * u + d2 * v + d3 * a)
         u_known = factor.solve(rhs)
         e = element[k]
@@ -212,6 +220,8 @@ def simulate_passage(
         np.maximum(d_max, dropper, out=d_max)
         slack_steps += bool(m)
 
+    if progress is not None:
+        progress(1.0)
     return Trajectory(
         time=time,
         position=position,

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from .definition import CatenaryDefinition, PantographDefinition
@@ -161,11 +162,12 @@ def simulate_static(
     fidelity: Fidelity,
     uplift_force: float,
     system: LinearSystem | None = None,
+    progress: Callable[[float], None] | None = None,
 ) -> Simulation:
     """Dynamic passage over a solved static state (the design must be statically feasible)."""
     catenary = static.layout.catenary
     system = linearise(static) if system is None else system
-    trajectory = simulate_passage(system, pantograph, uplift_force, speed, fidelity.time_step)
+    trajectory = simulate_passage(system, pantograph, uplift_force, speed, fidelity.time_step, progress=progress)
     window = analysis_window(catenary, fidelity)
     stats = contact_statistics(trajectory.position, trajectory.contact_force, fidelity.time_step, window,
                                trajectory.support_x, trajectory.support_uplift)
@@ -179,6 +181,7 @@ def simulate(
     speed: float,
     fidelity: Fidelity,
     uplift_force: float | None = None,
+    progress: Callable[[float], None] | None = None,
 ) -> Simulation:
     """Shape-finding, linearisation and the pantograph passage at ``speed`` (m/s).
 
@@ -197,7 +200,7 @@ def simulate(
     reason = static.infeasibility()
     if reason:
         raise ValueError(f"design is infeasible: {reason}")
-    return simulate_static(static, pantograph, speed, fidelity, force)
+    return simulate_static(static, pantograph, speed, fidelity, force, progress=progress)
 
 
 def evaluate(

@@ -1,0 +1,109 @@
+"""Validation against EN 50318:2002: the reference model's results against the accepted ranges.
+
+The ranges are data (``presets/validation/en50318-2002.toml``); the model is the "en50318-2002"
+catenary and pantograph presets, simulated as given. Nothing is tuned to land in a range: a
+quantity outside its range is reported as such, with the margin.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from .presets import load_catenary, load_pantograph
+from .simulation import Fidelity, simulate
+from .design import level_design
+
+VALIDATION_DIR = Path(__file__).parent / "presets" / "validation"
+
+QUANTITIES = ("mean", "std", "statistical_max", "statistical_min", "actual_max", "actual_min",
+              "max_support_uplift", "contact_loss_percent")
+
+
+@dataclass(frozen=True)
+class ValidationRow:
+    """One quantity at one speed.
+
+    Attributes
+    ----------
+    speed_kmh : float
+    quantity : str
+        A field of :class:`~catenary_env.statistics.ContactStatistics`.
+    value : float
+        Simulated value (N; m for the uplift; % for contact loss).
+    low, high : float
+        Accepted range.
+    """
+
+    speed_kmh: float
+    quantity: str
+    value: float
+    low: float
+    high: float
+
+    @property
+    def passed(self) -> bool:
+        return self.low <= self.value <= self.high
+
+    @property
+    def margin(self) -> float:
+        """Distance outside the range (0 inside), in the quantity's unit."""
+        return max(self.low - self.value, self.value - self.high, 0.0)
+
+
+@dataclass(frozen=True)
+class ValidationReport:
+    """The validation table.
+
+    Attributes
+    ----------
+    rows : tuple of ValidationRow
+    fidelity : Fidelity
+    uplift_force : float
+        N.
+    """
+
+    rows: tuple[ValidationRow, ...]
+    fidelity: Fidelity
+    uplift_force: float
+
+    @property
+    def passed(self) -> bool:
+        return all(row.passed for row in self.rows)
+
+
+def load_ranges(name: str = "en50318-2002") -> dict[float, dict[str, tuple[float, float]]]:
+    """Accepted ranges by speed (km/h) and quantity."""
+    with open(VALIDATION_DIR / f"{name}.toml", "rb") as handle:
+        data = tomllib.load(handle)
+    return {float(speed): {q: (float(lo), float(hi)) for q, (lo, hi) in table.items()}
+            for speed, table in data["ranges"].items()}
+
+
+def validate(speeds_kmh: tuple[float, ...] = (250.0, 300.0), fidelity: Fidelity | None = None) -> ValidationReport:
+    """Simulate the EN 50318:2002 reference model and compare with the accepted ranges.
+
+    Parameters
+    ----------
+    speeds_kmh : tuple of float
+        Speeds with ranges in the data file, km/h.
+    fidelity : Fidelity, optional
+        Defaults to the section of the preset (10 spans, central 2 analysed) with a converged mesh.
+    """
+    catenary = load_catenary("en50318-2002")
+    pantograph = load_pantograph("en50318-2002")
+    if fidelity is None:
+        fidelity = Fidelity(n_spans=catenary.n_spans, analysis_spans=catenary.analysis_spans,
+                            contact_wire_element=0.5, messenger_wire_element=1.0, time_step=1e-3)
+    ranges = load_ranges()
+    rows = []
+    for speed in speeds_kmh:
+        if speed not in ranges:
+            raise ValueError(f"speed {speed} km/h: the standard gives ranges at {sorted(ranges)} km/h only")
+        stats = simulate(catenary, pantograph, level_design(catenary), speed / 3.6, fidelity).statistics.as_dict()
+        for quantity in QUANTITIES:
+            low, high = ranges[speed][quantity]
+            rows.append(ValidationRow(speed, quantity, stats[quantity], low, high))
+    assert pantograph.uplift_force is not None
+    return ValidationReport(tuple(rows), fidelity, pantograph.uplift_force)
