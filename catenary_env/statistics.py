@@ -16,7 +16,8 @@ CUTOFF_HZ = 20.0
 """Low-pass cut-off of the contact force, Hz (EN 50318:2002; EN 50367)."""
 
 FILTER_ORDER = 4
-"""Butterworth order of one pass; the forward-backward (zero-phase) filter doubles it."""
+"""Butterworth order of one pass; the forward-backward (zero-phase) filter doubles it: -3 dB at
+the cut-off, -21 dB at 30 Hz, -41 dB at 40 Hz."""
 
 
 @dataclass(frozen=True)
@@ -65,9 +66,13 @@ def lowpass(force: np.ndarray, time_step: float, cutoff: float = CUTOFF_HZ) -> n
     time_step : float
         s.
     cutoff : float
-        -3 dB frequency of one pass, Hz.
+        -3 dB frequency of the applied (forward-backward) filter, Hz.
     """
-    sos = signal.butter(FILTER_ORDER, cutoff, btype="low", fs=1.0 / time_step, output="sos")
+    # Forward and backward passes square the magnitude response; set each pass's cut-off so that
+    # the applied (zero-phase) filter is -3 dB at ``cutoff``, the usual meaning of a cut-off
+    # frequency. A pass at ``cutoff`` itself would put the applied filter at -6 dB there.
+    per_pass = cutoff / (np.sqrt(2.0) - 1.0) ** (1.0 / (2 * FILTER_ORDER))
+    sos = signal.butter(FILTER_ORDER, per_pass, btype="low", fs=1.0 / time_step, output="sos")
     return signal.sosfiltfilt(sos, force)
 
 

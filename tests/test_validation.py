@@ -1,0 +1,44 @@
+"""EN 50318:2002 validation (SPEC 8; reference/models.md section 1), computed with the reference data as given.
+
+Each quantity at each speed is one test. Quantities the simulator misses are marked as known
+failures with the measured value (strict: the mark must go when they start to pass). Nothing is
+tuned to land in a range.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from catenary_env.validation import QUANTITIES, load_ranges, validate
+
+# Measured on 2026-11-22 (0.5 m contact-wire elements, 1 ms, 10 spans, central 2 analysed).
+KNOWN_MISSES = {
+    (250.0, "std"): "measured σ = 25.92 N, accepted 26–31 N (0.08 N low)",
+    (250.0, "actual_max"): "measured actual maximum = 170.0 N, accepted 175–210 N (5.0 N low)",
+}
+
+
+@pytest.fixture(scope="module")
+def report():
+    return validate((250.0, 300.0))
+
+
+def _cases():
+    for speed in (250.0, 300.0):
+        for quantity in QUANTITIES:
+            reason = KNOWN_MISSES.get((speed, quantity))
+            marks = [pytest.mark.xfail(strict=True, reason=reason)] if reason else []
+            yield pytest.param(speed, quantity, marks=marks, id=f"{speed:g}kmh-{quantity}")
+
+
+@pytest.mark.parametrize(("speed", "quantity"), list(_cases()))
+def test_en50318_quantity_is_inside_its_accepted_range(report, speed, quantity):
+    row = next(r for r in report.rows if r.speed_kmh == speed and r.quantity == quantity)
+    assert row.low <= row.value <= row.high, f"{quantity} at {speed:g} km/h = {row.value:.4g}, range {row.low}–{row.high}"
+
+
+def test_the_ranges_are_the_standards_table():
+    ranges = load_ranges()
+    assert ranges[300.0]["std"] == (32.0, 40.0)
+    assert ranges[250.0]["mean"] == (110.0, 120.0)
+    assert ranges[300.0]["max_support_uplift"] == (0.055, 0.065)
