@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from .definition import CatenaryDefinition, PantographDefinition
 from .design import Design, DesignError, check_design, check_speed
-from .dynamics import simulate_passage
+from .dynamics import PreparedPassage, prepare_passage, simulate_passage
 from .layout import build_layout
 from .linear_system import LinearSystem, linearise
 from .newmark import Trajectory
@@ -163,11 +163,16 @@ def simulate_static(
     uplift_force: float,
     system: LinearSystem | None = None,
     progress: Callable[[float], None] | None = None,
+    prepared: PreparedPassage | None = None,
 ) -> Simulation:
-    """Dynamic passage over a solved static state (the design must be statically feasible)."""
+    """Dynamic passage over a solved static state (the design must be statically feasible).
+
+    ``system`` and ``prepared`` (its factorisation) may be passed to reuse them across passages.
+    """
     catenary = static.layout.catenary
     system = linearise(static) if system is None else system
-    trajectory = simulate_passage(system, pantograph, uplift_force, speed, fidelity.time_step, progress=progress)
+    trajectory = simulate_passage(system, pantograph, uplift_force, speed, fidelity.time_step, progress=progress,
+                                  prepared=prepared)
     window = analysis_window(catenary, fidelity)
     stats = contact_statistics(trajectory.position, trajectory.contact_force, fidelity.time_step, window,
                                trajectory.support_x, trajectory.support_uplift)
@@ -270,9 +275,10 @@ def calibrate_uplift(
     if reason:
         raise ValueError(f"cannot calibrate the uplift on an infeasible design: {reason}")
     system = linearise(static)
+    prepared = prepare_passage(system, fidelity.time_step)
 
     def mean_force(uplift: float) -> float:
-        return simulate_static(static, pantograph, speed, fidelity, uplift, system).statistics.mean
+        return simulate_static(static, pantograph, speed, fidelity, uplift, system, prepared=prepared).statistics.mean
 
     x0, f0 = target_mean, mean_force(target_mean) - target_mean
     x1 = x0 - f0
