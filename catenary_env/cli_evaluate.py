@@ -32,18 +32,30 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "evaluate",
         help="simulate one design of a design problem and print its contact-force statistics",
         description="Simulate one design of a design problem (SPEC 4) at one speed and print its feasibility "
-                    "and contact-force statistics. The pantograph's uplift force is set on the problem's "
-                    "reference design so that its mean contact force meets EN 50367 at the speed.",
+        "and contact-force statistics. The pantograph's uplift force is set on the problem's "
+        "reference design so that its mean contact force meets EN 50367 at the speed.",
         epilog=f"Variables, in order: {table}.",
     )
     parser.add_argument("problem", choices=list(PROBLEMS), help="design problem")
-    parser.add_argument("--x", nargs="+", type=float, required=True, metavar="V",
-                        help="the problem's variables in order, m (heights on a 1 mm grid, positions on 1 cm; "
-                             "off-grid values are rounded)")
-    parser.add_argument("--speed", type=float, default=300.0, metavar="KMH", help="train speed, km/h (default 300)")
-    parser.add_argument("--fidelity", choices=list(FIDELITIES), default="study",
-                        help="model size: study (20 spans, the design setting; default) or test (5 spans, coarse "
-                             "mesh; for quick checks, not for design conclusions)")
+    parser.add_argument(
+        "--x",
+        nargs="+",
+        type=float,
+        required=True,
+        metavar="V",
+        help="the problem's variables in order, m (heights on a 1 mm grid, positions on 1 cm; "
+        "off-grid values are rounded)",
+    )
+    parser.add_argument(
+        "--speed", type=float, default=300.0, metavar="KMH", help="train speed, km/h (default 300)"
+    )
+    parser.add_argument(
+        "--fidelity",
+        choices=list(FIDELITIES),
+        default="study",
+        help="model size: study (20 spans, the design setting; default) or test (5 spans, coarse "
+        "mesh; for quick checks, not for design conclusions)",
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     parser.set_defaults(handler=run)
     return parser
@@ -69,14 +81,24 @@ def run(args: argparse.Namespace) -> int:
 
 def _checked_variables(problem: DesignProblem, values: list[float]) -> np.ndarray:
     if len(values) != problem.n_variables:
-        bounds = ", ".join(f"{n} in [{lo:g}, {hi:g}] m" for n, lo, hi in
-                           zip(problem.variables, problem.lower, problem.upper, strict=True))
-        raise ValueError(f"--x: {problem.name} takes {problem.n_variables} values ({bounds}), got {len(values)}")
+        bounds = ", ".join(
+            f"{n} in [{lo:g}, {hi:g}] m"
+            for n, lo, hi in zip(problem.variables, problem.lower, problem.upper, strict=True)
+        )
+        raise ValueError(
+            f"--x: {problem.name} takes {problem.n_variables} values ({bounds}), got {len(values)}"
+        )
     return problem.check_variables(values)
 
 
-def _record(problem: DesignProblem, x: np.ndarray, given: list[float], speed: float, fidelity: str,
-            evaluation: Evaluation) -> dict[str, Any]:
+def _record(
+    problem: DesignProblem,
+    x: np.ndarray,
+    given: list[float],
+    speed: float,
+    fidelity: str,
+    evaluation: Evaluation,
+) -> dict[str, Any]:
     statistics = evaluation.statistics.as_dict() if evaluation.statistics is not None else None
     return {
         "problem": problem.name,

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import difflib
 import functools
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -110,7 +110,9 @@ class DesignProblem:
         for field_name in ("lower", "upper", "step"):
             array = np.array(getattr(self, field_name), dtype=np.float64)
             if array.shape != (n,):
-                raise ValueError(f"problem {self.name!r}: {field_name} must have {n} values, one per variable")
+                raise ValueError(
+                    f"problem {self.name!r}: {field_name} must have {n} values, one per variable"
+                )
             array.setflags(write=False)  # frozen record: the bounds must not change under a user's feet
             object.__setattr__(self, field_name, array)
         if len(self.units) != n:
@@ -125,8 +127,10 @@ class DesignProblem:
             return
         mid = self.n_droppers % 2
         if positions and 2 * len(positions) + mid != self.n_droppers:
-            raise ValueError(f"problem {self.name!r}: {len(positions)} positions cannot place {self.n_droppers} "
-                             "droppers symmetrically")
+            raise ValueError(
+                f"problem {self.name!r}: {len(positions)} positions cannot place {self.n_droppers} "
+                "droppers symmetrically"
+            )
         if heights and len(heights) != self.n_droppers // 2 + mid:
             raise ValueError(f"problem {self.name!r}: needs {self.n_droppers // 2 + mid} heights")
 
@@ -171,7 +175,9 @@ class DesignProblem:
         values = self._as_vector(x)
         clipped = np.clip(values, self.lower, self.upper)
         index = np.floor((clipped - self.lower) / self.step + 0.5 + _TIE_TOLERANCE)
-        return np.round(np.minimum(self.lower + index * self.step, self.upper), _DECIMALS)
+        return np.asarray(
+            np.round(np.minimum(self.lower + index * self.step, self.upper), _DECIMALS), np.float64
+        )
 
     def out_of_bounds(self, x: ArrayLike) -> tuple[str, ...]:
         """Names of the variables of ``x`` that lie outside the bounds (what :meth:`snap` would clip)."""
@@ -191,8 +197,9 @@ class DesignProblem:
         outside = self.out_of_bounds(values)
         problems = [
             f"{name} = {value!r} {unit}: must lie in [{lo:g}, {hi:g}] {unit}"
-            for name, unit, value, lo, hi in zip(self.variables, self.units, values.tolist(), self.lower,
-                                                 self.upper, strict=True)
+            for name, unit, value, lo, hi in zip(
+                self.variables, self.units, values.tolist(), self.lower, self.upper, strict=True
+            )
             if name in outside
         ]
         if problems:
@@ -200,7 +207,7 @@ class DesignProblem:
         return self.snap(values)
 
     def grid_index(self, x: ArrayLike) -> NDArray[np.int64]:
-        """Integer grid coordinates of ``x`` (snapped first): 0 at the lower bound, ``n_levels - 1`` at the upper."""
+        """Integer grid coordinates of snapped ``x``: 0 at the lower bound, ``n_levels - 1`` at the upper."""
         return np.round((self.snap(x) - self.lower) / self.step).astype(np.int64)
 
     def from_grid_index(self, index: ArrayLike) -> NDArray[np.float64]:
@@ -267,13 +274,17 @@ class DesignProblem:
         Calibrated so that the reference design's mean contact force equals the EN 50367 target at
         ``speed_kmh``; cached per catenary, speed and fidelity in this process.
         """
-        return _calibrated_uplift(self.catenary, self.reference_design(), float(speed_kmh),
-                                  resolve_fidelity(fidelity))
+        return _calibrated_uplift(
+            self.catenary, self.reference_design(), float(speed_kmh), resolve_fidelity(fidelity)
+        )
 
-    def reference_evaluation(self, speed_kmh: float = 300.0, fidelity: str | Fidelity = "study") -> Evaluation:
+    def reference_evaluation(
+        self, speed_kmh: float = 300.0, fidelity: str | Fidelity = "study"
+    ) -> Evaluation:
         """The reference design's evaluation at a speed (cached in this process)."""
-        return _reference_evaluation(self.catenary, self.reference_design(), float(speed_kmh),
-                                     resolve_fidelity(fidelity))
+        return _reference_evaluation(
+            self.catenary, self.reference_design(), float(speed_kmh), resolve_fidelity(fidelity)
+        )
 
     def evaluate(
         self,
@@ -317,8 +328,9 @@ class DesignProblem:
             check_design(catenary, design)
         except DesignError as error:
             return Evaluation(False, f"design: {error}", None, (), (), force, 0.0)
-        return simulation.evaluate(catenary, self.pantograph_definition, design, float(speed_kmh) / 3.6,
-                                   resolved, uplift_force=force)
+        return simulation.evaluate(
+            catenary, self.pantograph_definition, design, float(speed_kmh) / 3.6, resolved, uplift_force=force
+        )
 
     # -- helpers ----------------------------------------------------------------------------------------
 
@@ -326,11 +338,15 @@ class DesignProblem:
         try:
             values = np.asarray(x, dtype=np.float64)
         except (TypeError, ValueError):
-            raise ValueError(f"problem {self.name}: x must be {self.n_variables} numbers "
-                             f"({', '.join(self.variables)}), got {x!r}") from None
+            raise ValueError(
+                f"problem {self.name}: x must be {self.n_variables} numbers "
+                f"({', '.join(self.variables)}), got {x!r}"
+            ) from None
         if values.shape != (self.n_variables,):
-            raise ValueError(f"problem {self.name}: x must have shape ({self.n_variables},) "
-                             f"({', '.join(self.variables)}), got shape {values.shape}")
+            raise ValueError(
+                f"problem {self.name}: x must have shape ({self.n_variables},) "
+                f"({', '.join(self.variables)}), got shape {values.shape}"
+            )
         if not np.all(np.isfinite(values)):
             raise ValueError(f"problem {self.name}: x must be finite, got {values.tolist()}")
         return values
@@ -361,7 +377,7 @@ class ProblemRegistry(dict[str, DesignProblem]):
             self[name] = problem
         return self[name]
 
-    def __ior__(self, other: Mapping[str, DesignProblem] | Iterable[tuple[str, DesignProblem]]) -> ProblemRegistry:
+    def __ior__(self, other: Any) -> ProblemRegistry:  # type: ignore[override, misc]
         self.update(other)
         return self
 
@@ -402,9 +418,13 @@ def resolve_fidelity(fidelity: str | Fidelity, n_spans: int | None = None) -> Fi
         return resolved
     if isinstance(n_spans, bool) or not isinstance(n_spans, int | np.integer) or n_spans < 3:
         raise ValueError(f"n_spans = {n_spans!r}: must be an integer >= 3")
-    return Fidelity(n_spans=int(n_spans), analysis_spans=min(resolved.analysis_spans, int(n_spans) - 2),
-                    contact_wire_element=resolved.contact_wire_element,
-                    messenger_wire_element=resolved.messenger_wire_element, time_step=resolved.time_step)
+    return Fidelity(
+        n_spans=int(n_spans),
+        analysis_spans=min(resolved.analysis_spans, int(n_spans) - 2),
+        contact_wire_element=resolved.contact_wire_element,
+        messenger_wire_element=resolved.messenger_wire_element,
+        time_step=resolved.time_step,
+    )
 
 
 def evaluate_problem(
@@ -448,25 +468,35 @@ def _calibrated_uplift(catenary_name: str, reference: Design, speed_kmh: float, 
     catenary = _catenary(catenary_name)
     speed = speed_kmh / 3.6
     check_speed(catenary, speed)
-    return float(simulation.calibrate_uplift(
-        catenary, _pantograph(catenary.pantograph), reference, speed, fidelity,
-        target_mean=simulation.en50367_mean_force(speed),
-    ))
+    return float(
+        simulation.calibrate_uplift(
+            catenary,
+            _pantograph(catenary.pantograph),
+            reference,
+            speed,
+            fidelity,
+            target_mean=simulation.en50367_mean_force(speed),
+        )
+    )
 
 
 @functools.lru_cache(maxsize=256)
-def _reference_evaluation(catenary_name: str, reference: Design, speed_kmh: float, fidelity: Fidelity) -> Evaluation:
+def _reference_evaluation(
+    catenary_name: str, reference: Design, speed_kmh: float, fidelity: Fidelity
+) -> Evaluation:
     catenary = _catenary(catenary_name)
     force = _calibrated_uplift(catenary_name, reference, speed_kmh, fidelity)
-    return simulation.evaluate(catenary, _pantograph(catenary.pantograph), reference, speed_kmh / 3.6, fidelity,
-                               uplift_force=force)
+    return simulation.evaluate(
+        catenary, _pantograph(catenary.pantograph), reference, speed_kmh / 3.6, fidelity, uplift_force=force
+    )
 
 
-# -- the problems of SPEC 4 -----------------------------------------------------------------------------------
+# -- the problems of SPEC 4 ------------------------------------------------------------------------------
 
 
-def _problem(name: str, catenary: str, n_droppers: int, bounds: Sequence[tuple[str, float, float]],
-             description: str) -> DesignProblem:
+def _problem(
+    name: str, catenary: str, n_droppers: int, bounds: Sequence[tuple[str, float, float]], description: str
+) -> DesignProblem:
     names = tuple(b[0] for b in bounds)
     return DesignProblem(
         name=name,
@@ -489,31 +519,70 @@ _BENCHMARK = "the benchmark simple catenary (55 m spans, 9 droppers in the refer
 _STITCHED = "the stitched catenary (65 m spans, 7 droppers in the reference)"
 
 for _p in (
-    _problem("BPresag", "benchmark", 9, [("s", -0.02, 0.10)],
-             f"Pre-sag of {_BENCHMARK}: parabolic contact-wire profile, s below the level at mid-span "
-             "(negative = raised), on the preset's droppers."),
-    _problem("B1", "benchmark", 9, _heights(5),
-             f"Contact-wire heights of {_BENCHMARK}: dh_i is the height change at dropper i and its mirror "
-             "(dropper 1 at the support side, 5 at mid-span), on the preset's droppers."),
-    _problem("B2", "benchmark", 9,
-             [("d_1", 0.1, 7.4), ("d_2", 7.5, 13.1), ("d_3", 13.2, 18.8), ("d_4", 18.9, 27.4)],
-             f"Dropper positions of {_BENCHMARK}: d_i is the distance of dropper i (and, mirrored, of its "
-             "twin) from the span's first support; the mid-span dropper stays; level contact wire."),
-    _problem("B3", "benchmark", 5, [("d_1", 0.1, 13.0), ("d_2", 13.1, 27.4)] + _heights(3),
-             f"Five droppers per span instead of nine on {_BENCHMARK}: positions d_1, d_2 (mirrored) and "
-             "the mid-span dropper, with height changes dh_1..dh_3 (dh_3 at mid-span)."),
-    _problem("SWPresag", "stitched", 7, [("s", -0.02, 0.10)],
-             f"Pre-sag of {_STITCHED}: parabolic contact-wire profile, s below the level at mid-span "
-             "(negative = raised), on the preset's droppers."),
-    _problem("SW1", "stitched", 7, _heights(4),
-             f"Contact-wire heights of {_STITCHED}: dh_i is the height change at dropper i and its mirror "
-             "(dropper 1, on the stitch wire, at the support side; 4 at mid-span)."),
-    _problem("SW2", "stitched", 7, [("d_1", 0.1, 8.9), ("d_2", 9.1, 20.4), ("d_3", 20.5, 32.4)],
-             f"Dropper positions of {_STITCHED}: d_i is the distance of dropper i (and its mirror) from the "
-             "span's first support; dropper 1 hangs from the stitch wire; level contact wire."),
-    _problem("SW3", "stitched", 5, [("d_1", 2.0, 9.0), ("d_2", 10.0, 30.0)] + _heights(3),
-             f"Five droppers per span instead of seven on {_STITCHED}: positions d_1 (on the stitch wire), "
-             "d_2 (mirrored) and the mid-span dropper, with height changes dh_1..dh_3 (dh_3 at mid-span)."),
+    _problem(
+        "BPresag",
+        "benchmark",
+        9,
+        [("s", -0.02, 0.10)],
+        f"Pre-sag of {_BENCHMARK}: parabolic contact-wire profile, s below the level at mid-span "
+        "(negative = raised), on the preset's droppers.",
+    ),
+    _problem(
+        "B1",
+        "benchmark",
+        9,
+        _heights(5),
+        f"Contact-wire heights of {_BENCHMARK}: dh_i is the height change at dropper i and its mirror "
+        "(dropper 1 at the support side, 5 at mid-span), on the preset's droppers.",
+    ),
+    _problem(
+        "B2",
+        "benchmark",
+        9,
+        [("d_1", 0.1, 7.4), ("d_2", 7.5, 13.1), ("d_3", 13.2, 18.8), ("d_4", 18.9, 27.4)],
+        f"Dropper positions of {_BENCHMARK}: d_i is the distance of dropper i (and, mirrored, of its "
+        "twin) from the span's first support; the mid-span dropper stays; level contact wire.",
+    ),
+    _problem(
+        "B3",
+        "benchmark",
+        5,
+        [("d_1", 0.1, 13.0), ("d_2", 13.1, 27.4)] + _heights(3),
+        f"Five droppers per span instead of nine on {_BENCHMARK}: positions d_1, d_2 (mirrored) and "
+        "the mid-span dropper, with height changes dh_1..dh_3 (dh_3 at mid-span).",
+    ),
+    _problem(
+        "SWPresag",
+        "stitched",
+        7,
+        [("s", -0.02, 0.10)],
+        f"Pre-sag of {_STITCHED}: parabolic contact-wire profile, s below the level at mid-span "
+        "(negative = raised), on the preset's droppers.",
+    ),
+    _problem(
+        "SW1",
+        "stitched",
+        7,
+        _heights(4),
+        f"Contact-wire heights of {_STITCHED}: dh_i is the height change at dropper i and its mirror "
+        "(dropper 1, on the stitch wire, at the support side; 4 at mid-span).",
+    ),
+    _problem(
+        "SW2",
+        "stitched",
+        7,
+        [("d_1", 0.1, 8.9), ("d_2", 9.1, 20.4), ("d_3", 20.5, 32.4)],
+        f"Dropper positions of {_STITCHED}: d_i is the distance of dropper i (and its mirror) from the "
+        "span's first support; dropper 1 hangs from the stitch wire; level contact wire.",
+    ),
+    _problem(
+        "SW3",
+        "stitched",
+        5,
+        [("d_1", 2.0, 9.0), ("d_2", 10.0, 30.0)] + _heights(3),
+        f"Five droppers per span instead of seven on {_STITCHED}: positions d_1 (on the stitch wire), "
+        "d_2 (mirrored) and the mid-span dropper, with height changes dh_1..dh_3 (dh_3 at mid-span).",
+    ),
 ):
     register_problem(_p)
 del _p

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import time
 from collections import OrderedDict
 from typing import Any
 
@@ -12,6 +11,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import ArrayLike, NDArray
 
+from ..definition import CatenaryDefinition
 from ..design import Design, check_speed
 from ..problems import DesignProblem, get_problem, resolve_fidelity
 from ..simulation import Evaluation, Fidelity, en50367_mean_force
@@ -23,8 +23,8 @@ OBJECTIVES = ("sigma", "mean_sigma_over_speeds", "worst_sigma_over_speeds")
 INFEASIBLE_SIGMA_OVER_MEAN = 1.0
 """An infeasible design scores as if σ equalled the EN 50367 mean force Fm (σ / Fm = 1).
 
-That is more than three times the EN 50367 quality limit σ / Fm < 0.3: a design that keeps contact
-(the only feasible kind) cannot come near it, since Fm - 3σ would be -2 Fm.
+That is more than three times the EN 50367 quality limit σ / Fm < 0.3, and out of reach in practice of a
+design that keeps contact (the only feasible kind): its statistical minimum Fm - 3σ would be -2 Fm.
 """
 
 MEMO_SIZE = 1024
@@ -57,16 +57,18 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     change at dropper i (negative = lower); `d_i`: position of dropper i from the span's first support;
     dropper 1 is next to the support.
 
-    | Problem  | Catenary  | Droppers / span | Variables (m)                    | Bounds (m)                                         |
-    |----------|-----------|-----------------|----------------------------------|----------------------------------------------------|
-    | BPresag  | benchmark | 9               | s                                | [-0.02, 0.10]                                      |
-    | B1       | benchmark | 9               | dh_1 .. dh_5                     | each [-0.02, 0.02]                                 |
-    | B2       | benchmark | 9               | d_1 .. d_4                       | [0.1, 7.4], [7.5, 13.1], [13.2, 18.8], [18.9, 27.4] |
-    | B3       | benchmark | 5               | d_1, d_2, dh_1 .. dh_3           | [0.1, 13.0], [13.1, 27.4]; dh each [-0.02, 0.02]   |
-    | SWPresag | stitched  | 7               | s                                | [-0.02, 0.10]                                      |
-    | SW1      | stitched  | 7               | dh_1 .. dh_4                     | each [-0.02, 0.02]                                 |
-    | SW2      | stitched  | 7               | d_1 .. d_3                       | [0.1, 8.9], [9.1, 20.4], [20.5, 32.4]              |
-    | SW3      | stitched  | 5               | d_1, d_2, dh_1 .. dh_3           | [2, 9], [10, 30]; dh each [-0.02, 0.02]            |
+    | Problem  | Catenary  | Drop. | Variables (m)     | Bounds (m)                                          |
+    |----------|-----------|-------|-------------------|-----------------------------------------------------|
+    | BPresag  | benchmark | 9     | s                 | [-0.02, 0.10]                                       |
+    | B1       | benchmark | 9     | dh_1 .. dh_5      | each [-0.02, 0.02]                                  |
+    | B2       | benchmark | 9     | d_1 .. d_4        | [0.1, 7.4], [7.5, 13.1], [13.2, 18.8], [18.9, 27.4] |
+    | B3       | benchmark | 5     | d_1, d_2, dh_1..3 | [0.1, 13.0], [13.1, 27.4]; dh [-0.02, 0.02]         |
+    | SWPresag | stitched  | 7     | s                 | [-0.02, 0.10]                                       |
+    | SW1      | stitched  | 7     | dh_1 .. dh_4      | each [-0.02, 0.02]                                  |
+    | SW2      | stitched  | 7     | d_1 .. d_3        | [0.1, 8.9], [9.1, 20.4], [20.5, 32.4]               |
+    | SW3      | stitched  | 5     | d_1, d_2, dh_1..3 | [2, 9], [10, 30]; dh [-0.02, 0.02]                  |
+
+    Drop.: droppers per span.
 
     ## Observation Space
 
@@ -115,6 +117,8 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     `uplift_force` (N), `dropper_lengths` (m) and `dropper_forces` (N) of a central span,
     `wall_time` (s, of the simulations behind the result) and `clipped` (bool). With a multi-speed
     objective, `speed_kmh`, the statistics and `uplift_force` are arrays over `speeds_kmh`.
+    A design an env has already simulated (the last 1024, on the grid, at the same speed) is not
+    simulated again: the step returns the stored result, `wall_time` included.
 
     ## Arguments
 
@@ -165,9 +169,13 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self.objective = objective
         self.normalize_reward = bool(normalize_reward)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode = {render_mode!r}: must be None or one of {self.metadata['render_modes']}")
+            raise ValueError(
+                f"render_mode = {render_mode!r}: must be None or one of {self.metadata['render_modes']}"
+            )
         self.render_mode = render_mode
-        self._speeds, self._speed_range = self._check_speeds(speed_kmh, speed_range, objective, speeds_kmh)
+        self._speeds, self._speed_range = _speed_setting(
+            self.problem.catenary_definition, speed_kmh, speed_range, objective, speeds_kmh
+        )
         self._wave_speed_kmh = self.problem.catenary_definition.wave_speed * 3.6
         n = self.problem.n_variables
         self.action_space = spaces.Box(-1.0, 1.0, (n,), np.float32)
@@ -180,13 +188,16 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     # -- Gymnasium API ------------------------------------------------------------------------------------
 
-    def reset(self, *, seed: int | None = None,
-              options: dict[str, Any] | None = None) -> tuple[NDArray[np.float32], dict[str, Any]]:
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         super().reset(seed=seed)
         if options and "speed_kmh" in options:
             if self.objective != "sigma":
                 raise ValueError("options['speed_kmh'] is only for objective='sigma'")
-            self._speeds = self._check_speeds(float(options["speed_kmh"]), None, "sigma", None)[0]
+            speed = float(options["speed_kmh"])
+            check_speed(self.problem.catenary_definition, speed / 3.6)
+            self._speeds = (speed,)
         elif self._speed_range is not None:
             lo, hi = math.ceil(self._speed_range[0]), math.floor(self._speed_range[1])
             self._speeds = (float(self.np_random.integers(lo, hi, endpoint=True)),)
@@ -214,7 +225,10 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         from .rendering import render_design
 
         if self._last is None:
-            design, title = self.problem.reference_design(), f"{self.problem.name} reference design (level wire)"
+            design, title = (
+                self.problem.reference_design(),
+                f"{self.problem.name} reference design (level wire)",
+            )
             return render_design(self.problem.catenary_definition, design, title, ["not simulated"])
         design, title, lines = self._last
         return render_design(self.problem.catenary_definition, design, title, lines)
@@ -228,46 +242,25 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         return self.problem.snap(lower + 0.5 * (a + 1.0) * (upper - lower))
 
     def x_to_action(self, x: ArrayLike) -> NDArray[np.float32]:
-        """The action of variables ``x`` (m, within the bounds): inverse of :meth:`action_to_x` on the grid."""
+        """The action of variables ``x`` (m, within the bounds): :meth:`action_to_x`'s inverse on the grid."""
         values = self.problem.check_variables(x)
         lower, upper = self.problem.lower, self.problem.upper
         return (2.0 * (values - lower) / (upper - lower) - 1.0).astype(np.float32)
 
     # -- helpers ------------------------------------------------------------------------------------------
 
-    def _check_speeds(self, speed_kmh: float, speed_range: tuple[float, float] | None, objective: str,
-                      speeds_kmh: tuple[float, ...] | None) -> tuple[tuple[float, ...], tuple[float, float] | None]:
-        if objective not in OBJECTIVES:
-            raise ValueError(f"objective = {objective!r}: must be one of {', '.join(OBJECTIVES)}")
-        catenary = self.problem.catenary_definition
-        if objective == "sigma":
-            if speeds_kmh is not None:
-                raise ValueError("speeds_kmh is for the multi-speed objectives; use speed_kmh or speed_range")
-            if speed_range is None:
-                speeds = (float(speed_kmh),)
-            else:
-                lo, hi = (float(v) for v in speed_range)
-                if not (math.floor(hi) >= math.ceil(lo) and lo <= hi):
-                    raise ValueError(f"speed_range = {speed_range!r}: need lo <= hi with a whole km/h value between")
-                speeds = (lo, hi)
-        else:
-            if speed_range is not None:
-                raise ValueError(f"speed_range cannot be combined with objective={objective!r}; give speeds_kmh")
-            if not speeds_kmh:
-                raise ValueError(f"objective={objective!r} needs speeds_kmh, a tuple of speeds in km/h")
-            speeds = tuple(float(v) for v in speeds_kmh)
-        for v in speeds:
-            check_speed(catenary, v / 3.6)  # DesignError (a ValueError) naming the allowed range
-        return (speeds if speed_range is None else (speeds[0],)), (None if speed_range is None else speeds)
-
     def _check_action(self, action: ArrayLike) -> NDArray[np.float64]:
         try:
             values = np.asarray(action, dtype=np.float64)
         except (TypeError, ValueError):
-            raise ValueError(f"action must be an array of {self.problem.n_variables} numbers, got {action!r}") from None
+            raise ValueError(
+                f"action must be an array of {self.problem.n_variables} numbers, got {action!r}"
+            ) from None
         if values.shape != self.action_space.shape:
-            raise ValueError(f"action must have shape {self.action_space.shape} ({', '.join(self.problem.variables)}), "
-                             f"got shape {values.shape}")
+            raise ValueError(
+                f"action must have shape {self.action_space.shape} ({', '.join(self.problem.variables)}), "
+                f"got shape {values.shape}"
+            )
         if not np.all(np.isfinite(values)):
             raise ValueError(f"action must be finite (no NaN or inf), got {values.tolist()}")
         return values
@@ -307,16 +300,28 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         for speed in self._speeds:
             reference = self.problem.reference_evaluation(speed, self.fidelity)
             if not reference.feasible or reference.statistics is None:
-                raise RuntimeError(f"reward normalisation: the reference design of {self.problem.name} is infeasible "
-                                   f"at {speed} km/h ({reference.reason})")
+                raise RuntimeError(
+                    f"reward normalisation: the reference design of {self.problem.name} is infeasible "
+                    f"at {speed} km/h ({reference.reason})"
+                )
             sigmas.append(reference.statistics.std)
         return self._aggregate(sigmas)
 
-    def _info(self, x: NDArray[np.float64], design: Design, evaluations: list[Evaluation], objective: float,
-              feasible: bool, clipped: bool) -> dict[str, Any]:
+    def _info(
+        self,
+        x: NDArray[np.float64],
+        design: Design,
+        evaluations: list[Evaluation],
+        objective: float,
+        feasible: bool,
+        clipped: bool,
+    ) -> dict[str, Any]:
         single = len(self._speeds) == 1
-        reasons = [e.reason if single else f"at {v:g} km/h: {e.reason}"
-                   for v, e in zip(self._speeds, evaluations, strict=False) if not e.feasible]
+        reasons = [
+            e.reason if single else f"at {v:g} km/h: {e.reason}"
+            for v, e in zip(self._speeds, evaluations, strict=False)
+            if not e.feasible
+        ]
         info: dict[str, Any] = {
             "feasible": feasible,
             "reason": "; ".join(reasons),
@@ -331,7 +336,9 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
                 column = [float(getattr(s, name)) for s in stats]
                 info[name] = column[0] if single else np.array(column)
         uplift = [e.uplift_force for e in evaluations]
-        info["uplift_force"] = uplift[0] if single else np.array(uplift + [math.nan] * (len(self._speeds) - len(uplift)))
+        info["uplift_force"] = (
+            uplift[0] if single else np.array(uplift + [math.nan] * (len(self._speeds) - len(uplift)))
+        )
         info["dropper_lengths"] = tuple(evaluations[0].dropper_lengths)
         info["dropper_forces"] = tuple(evaluations[0].dropper_forces)
         info["wall_time"] = float(sum(e.wall_time for e in evaluations))
@@ -342,8 +349,10 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         lines = [f"feasible: {info['feasible']}" + (f" ({info['reason']})" if info["reason"] else "")]
         lines.append("variables (m): " + ", ".join(f"{k} = {v:.3f}" for k, v in info["variables"].items()))
         if "std" in info:
-            lines.append(f"sigma = {np.round(info['std'], 2)} N, Fm = {np.round(info['mean'], 2)} N, "
-                         f"contact loss = {np.round(info['contact_loss_percent'], 2)} %")
+            lines.append(
+                f"sigma = {np.round(info['std'], 2)} N, Fm = {np.round(info['mean'], 2)} N, "
+                f"contact loss = {np.round(info['contact_loss_percent'], 2)} %"
+            )
         return lines
 
     def _observation(self) -> NDArray[np.float32]:
@@ -355,3 +364,37 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     def _speed_text(self) -> str:
         return ", ".join(f"{v:g}" for v in self._speeds) + " km/h"
+
+
+def _speed_setting(
+    catenary: CatenaryDefinition,
+    speed_kmh: float,
+    speed_range: tuple[float, float] | None,
+    objective: str,
+    speeds_kmh: tuple[float, ...] | None,
+) -> tuple[tuple[float, ...], tuple[float, float] | None]:
+    """Check the speed arguments; return the speeds of the first episode (km/h) and the range, if any."""
+    if objective not in OBJECTIVES:
+        raise ValueError(f"objective = {objective!r}: must be one of {', '.join(OBJECTIVES)}")
+    if objective != "sigma":
+        if speed_range is not None:
+            raise ValueError(f"speed_range cannot be combined with objective={objective!r}; give speeds_kmh")
+        if not speeds_kmh:
+            raise ValueError(f"objective={objective!r} needs speeds_kmh, a tuple of speeds in km/h")
+        speeds = tuple(float(v) for v in speeds_kmh)
+        checked: tuple[float, ...] = speeds
+        bounds: tuple[float, float] | None = None
+    elif speeds_kmh is not None:
+        raise ValueError("speeds_kmh is for the multi-speed objectives; use speed_kmh or speed_range")
+    elif speed_range is None:
+        speeds = checked = (float(speed_kmh),)
+        bounds = None
+    else:
+        lo, hi = (float(v) for v in speed_range)
+        if not (lo <= hi and math.floor(hi) >= math.ceil(lo)):
+            raise ValueError(f"speed_range = {speed_range!r}: need lo <= hi with a whole km/h value between")
+        bounds = (lo, hi)
+        checked, speeds = bounds, (float(math.ceil(lo)),)  # reset() draws the episode's speed
+    for v in checked:
+        check_speed(catenary, v / 3.6)  # DesignError (a ValueError) naming the allowed range
+    return speeds, bounds

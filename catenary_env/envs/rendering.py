@@ -10,12 +10,16 @@ from __future__ import annotations
 
 import textwrap
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..definition import CatenaryDefinition
 from ..design import Design, estimated_messenger_height
+
+if TYPE_CHECKING:  # matplotlib is optional: imported for real only inside render_design
+    from matplotlib.axes import Axes
 
 INSTALL_HINT = "rendering needs matplotlib: pip install catenary-env[plot]"
 
@@ -24,8 +28,9 @@ TEXT_WIDTH = 100
 """Characters per line of the statistics text (monospace, 8 pt, fits 800 px)."""
 
 
-def render_design(catenary: CatenaryDefinition, design: Design, title: str,
-                  lines: Sequence[str]) -> NDArray[np.uint8]:
+def render_design(
+    catenary: CatenaryDefinition, design: Design, title: str, lines: Sequence[str]
+) -> NDArray[np.uint8]:
     """Draw a span's design and return the image.
 
     Parameters
@@ -55,8 +60,9 @@ def render_design(catenary: CatenaryDefinition, design: Design, title: str,
     _draw_span(geometry, catenary, design)
     _draw_heights(heights, catenary, design)
     wrapped = [part for line in lines for part in textwrap.wrap(line, TEXT_WIDTH, subsequent_indent="  ")]
-    heights.text(0.0, -0.32, "\n".join(wrapped), transform=heights.transAxes, va="top", family="monospace",
-                 fontsize=8)
+    heights.text(
+        0.0, -0.32, "\n".join(wrapped), transform=heights.transAxes, va="top", family="monospace", fontsize=8
+    )
     # CONTACT-FORCE PLOT: the contact force along the track belongs here (SPEC 5), but Evaluation carries
     # no force history yet; until it does, the statistics above stand in for it.
     geometry.set_title(title, fontsize=10)
@@ -66,7 +72,7 @@ def render_design(catenary: CatenaryDefinition, design: Design, title: str,
     return np.array(image, dtype=np.uint8)  # a copy: the canvas's buffer dies with the figure
 
 
-def _draw_span(axes: object, catenary: CatenaryDefinition, design: Design) -> None:
+def _draw_span(axes: Axes, catenary: CatenaryDefinition, design: Design) -> None:
     length = catenary.span_length
     x = np.linspace(0.0, length, 201)
     positions = np.asarray(design.dropper_positions)
@@ -77,18 +83,32 @@ def _draw_span(axes: object, catenary: CatenaryDefinition, design: Design) -> No
     axes.plot(x, estimated_messenger_height(catenary, x), color="tab:blue", label="messenger wire (estimate)")
     axes.vlines(positions, contact, messenger, color="tab:gray", label="droppers")
     axes.plot(wire_x, wire_z, color="tab:red", marker="o", markersize=3, label="contact wire")
-    axes.vlines([0.0, length], catenary.contact_wire_height - 0.3, catenary.messenger_height + 0.2,
-                color="black", linewidth=3, label="supports")
+    axes.vlines(
+        [0.0, length],
+        catenary.contact_wire_height - 0.3,
+        catenary.messenger_height + 0.2,
+        color="black",
+        linewidth=3,
+        label="supports",
+    )
     if catenary.stitch_wire is not None:
         # The stitch wire's sag is only known after shape-finding: say where it is rather than guess it.
-        axes.text(0.5, 0.9, f"stitch wire ({catenary.stitch_wire.length:g} m, centred on each support; carries "
-                  "dropper 1) not drawn", transform=axes.transAxes, ha="center", fontsize=7, color="tab:gray")
+        axes.text(
+            0.5,
+            0.9,
+            f"stitch wire ({catenary.stitch_wire.length:g} m, centred on each support; carries "
+            "dropper 1) not drawn",
+            transform=axes.transAxes,
+            ha="center",
+            fontsize=7,
+            color="tab:gray",
+        )
     axes.set_xlim(-0.02 * length, 1.02 * length)
     axes.set_ylabel("height (m)")
     axes.legend(loc="lower center", fontsize=7, ncol=4)
 
 
-def _draw_heights(axes: object, catenary: CatenaryDefinition, design: Design) -> None:
+def _draw_heights(axes: Axes, catenary: CatenaryDefinition, design: Design) -> None:
     length = catenary.span_length
     positions = np.concatenate([[0.0], design.dropper_positions, [length]])
     offsets_mm = 1000.0 * np.concatenate([[0.0], design.contact_wire_offsets, [0.0]])
