@@ -13,6 +13,8 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
+
 from .definition import CatenaryDefinition, PantographDefinition
 from .design import Design, DesignError, check_design, check_speed
 from .dynamics import PreparedPassage, prepare_passage, simulate_passage
@@ -20,7 +22,7 @@ from .layout import build_layout
 from .linear_system import LinearSystem, linearise
 from .newmark import Trajectory
 from .shape_finding import ShapeFindingError, StaticSolution, find_shape
-from .statistics import ContactStatistics, contact_statistics
+from .statistics import ContactStatistics, contact_statistics, lowpass
 
 
 @dataclass(frozen=True)
@@ -78,6 +80,9 @@ class Evaluation:
         Static uplift force of the pantograph used, N.
     wall_time : float
         s.
+    trace_position, trace_force : tuple of float
+        The filtered contact force (N) along the analysis section (m), at most
+        :data:`TRACE_POINTS` samples, for pictures; empty when no passage was simulated.
     """
 
     feasible: bool
@@ -87,6 +92,11 @@ class Evaluation:
     dropper_forces: tuple[float, ...]
     uplift_force: float
     wall_time: float
+    trace_position: tuple[float, ...] = ()
+    trace_force: tuple[float, ...] = ()
+
+
+TRACE_POINTS = 1000
 
 
 @dataclass(frozen=True)
@@ -234,10 +244,22 @@ def evaluate(
     reason = static.infeasibility()
     if reason:
         return Evaluation(False, reason, None, lengths, forces, force, time.perf_counter() - start)
-    stats = simulate_static(static, pantograph, speed, fidelity, force).statistics
+    sim = simulate_static(static, pantograph, speed, fidelity, force)
+    stats = sim.statistics
     if stats.contact_loss_percent > 0.0:
         reason = f"dynamic: contact lost {stats.contact_loss_percent:.3f} % of the time in the analysis section"
-    return Evaluation(not reason, reason, stats, lengths, forces, force, time.perf_counter() - start)
+    position, filtered = _trace(sim)
+    return Evaluation(not reason, reason, stats, lengths, forces, force, time.perf_counter() - start,
+                      position, filtered)
+
+
+def _trace(sim: Simulation) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    tr = sim.trajectory
+    inside = np.flatnonzero((tr.position >= sim.window[0]) & (tr.position <= sim.window[1]))
+    every = max(1, inside.size // TRACE_POINTS)
+    pick = inside[::every]
+    filtered = lowpass(tr.contact_force, tr.time[1] - tr.time[0])[pick]
+    return tuple(float(v) for v in tr.position[pick]), tuple(float(v) for v in filtered)
 
 
 def _central_span(static: StaticSolution, design: Design) -> tuple[tuple[float, ...], tuple[float, ...]]:

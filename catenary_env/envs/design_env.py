@@ -185,6 +185,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._memo: OrderedDict[tuple[tuple[float, ...], float], Evaluation] = OrderedDict()
         self._reset_done = False
         self._last: tuple[Design, str, list[str]] | None = None
+        self._last_trace: tuple[tuple[float, ...], tuple[float, ...]] = ((), ())
 
     # -- Gymnasium API ------------------------------------------------------------------------------------
 
@@ -216,6 +217,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         design = self.problem.design(x)
         info = self._info(x, design, evaluations, objective, feasible, clipped)
         self._last = (design, f"{self.problem.name} design at {self._speed_text()}", self._summary(info))
+        self._last_trace = (evaluations[0].trace_position, evaluations[0].trace_force)
         return self._observation(), float(reward), True, False, info
 
     def render(self) -> NDArray[np.uint8] | None:
@@ -231,7 +233,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             )
             return render_design(self.problem.catenary_definition, design, title, ["not simulated"])
         design, title, lines = self._last
-        return render_design(self.problem.catenary_definition, design, title, lines)
+        return render_design(self.problem.catenary_definition, design, title, lines, self._last_trace)
 
     # -- mapping ------------------------------------------------------------------------------------------
 

@@ -2,8 +2,9 @@
 
 Top panel: the span as built, to scale in metres: messenger wire (parabolic estimate, the same one
 :func:`~catenary_env.design.check_design` uses), droppers, contact wire through the design heights.
-Bottom panel: the contact-wire height change Δh at the droppers in millimetres, where a few millimetres
-are visible, with the simulation's statistics as text.
+Middle panel: the contact-wire height change Δh at the droppers in millimetres, where a few millimetres
+are visible, with the simulation's statistics as text. Bottom panel (after a step): the filtered contact
+force along the analysis section.
 """
 
 from __future__ import annotations
@@ -29,7 +30,11 @@ TEXT_WIDTH = 100
 
 
 def render_design(
-    catenary: CatenaryDefinition, design: Design, title: str, lines: Sequence[str]
+    catenary: CatenaryDefinition,
+    design: Design,
+    title: str,
+    lines: Sequence[str],
+    trace: tuple[Sequence[float], Sequence[float]] = ((), ()),
 ) -> NDArray[np.uint8]:
     """Draw a span's design and return the image.
 
@@ -41,6 +46,8 @@ def render_design(
         First line of the figure title.
     lines : sequence of str
         Text shown under the height plot (statistics, feasibility).
+    trace : (positions, forces)
+        Filtered contact force (N) along the analysis section (m); a third panel when not empty.
 
     Returns
     -------
@@ -56,17 +63,23 @@ def render_design(
 
     figure = Figure(figsize=(WIDTH_PX / DPI, HEIGHT_PX / DPI), dpi=DPI)
     canvas = FigureCanvasAgg(figure)
-    geometry, heights = figure.subplots(2, 1, gridspec_kw={"height_ratios": [3, 2]})
+    positions, forces = trace
+    if len(forces):
+        geometry, heights, force = figure.subplots(3, 1, gridspec_kw={"height_ratios": [3, 2, 2]})
+        force.plot(positions, forces, color="tab:blue", linewidth=0.8)
+        force.axhline(float(np.mean(forces)), color="tab:red", linewidth=0.8, linestyle="--")
+        force.set_xlabel("position along the track (m)", fontsize=8)
+        force.set_ylabel("contact force,\n20 Hz (N)", fontsize=8)
+        force.tick_params(labelsize=7)
+    else:
+        geometry, heights = figure.subplots(2, 1, gridspec_kw={"height_ratios": [3, 2]})
     _draw_span(geometry, catenary, design)
     _draw_heights(heights, catenary, design)
     wrapped = [part for line in lines for part in textwrap.wrap(line, TEXT_WIDTH, subsequent_indent="  ")]
-    heights.text(
-        0.0, -0.32, "\n".join(wrapped), transform=heights.transAxes, va="top", family="monospace", fontsize=8
-    )
-    # CONTACT-FORCE PLOT: the contact force along the track belongs here (SPEC 5), but Evaluation carries
-    # no force history yet; until it does, the statistics above stand in for it.
+    figure.text(0.02, 0.01, "\n".join(wrapped), va="bottom", family="monospace", fontsize=8)
     geometry.set_title(title, fontsize=10)
-    figure.subplots_adjust(left=0.09, right=0.98, top=0.93, bottom=0.25, hspace=0.35)
+    figure.subplots_adjust(left=0.09, right=0.98, top=0.93, bottom=0.04 + 0.017 * len(wrapped) + 0.06,
+                           hspace=0.45)
     canvas.draw()
     image = np.asarray(canvas.buffer_rgba())[:, :, :3]
     return np.array(image, dtype=np.uint8)  # a copy: the canvas's buffer dies with the figure

@@ -1,0 +1,133 @@
+"""Study 2: σ against pre-sag on both catenaries at 300 km/h, and the best pre-sag against speed (SPEC 7.2).
+
+The design problems BPresag and SWPresag: a parabolic contact-wire pre-sag s (m at mid-span). The
+pantograph's uplift is set once per catenary and speed on the level reference design (SPEC 3.5).
+Quick: the "test" fidelity (5 spans, coarse) on a coarse grid; full: the study fidelity (20 spans)
+on the problems' 1 cm grid.
+
+    python -m experiments.presag [--full] [--workers 2] [--out results]
+"""
+
+from __future__ import annotations
+
+import argparse
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from catenary_env.problems import evaluate_problem, get_problem
+
+from .common import DEFAULT_OUT, markdown_table, read_csv, study_dir, write_csv
+
+NAME = "presag"
+PROBLEMS = ("BPresag", "SWPresag")
+
+
+@dataclass(frozen=True)
+class Config:
+    full: bool = False
+    out: Path = DEFAULT_OUT
+    workers: int = 2
+
+    @property
+    def fidelity(self) -> str:
+        return "study" if self.full else "test"
+
+    @property
+    def presags(self) -> tuple[float, ...]:
+        step = 0.01 if self.full else 0.02
+        return tuple(np.round(np.arange(-0.02, 0.10 + 1e-9, step), 3))
+
+    @property
+    def speeds_kmh(self) -> tuple[float, ...]:
+        return (200.0, 220.0, 240.0, 260.0, 280.0, 300.0, 320.0) if self.full else (200.0, 260.0, 320.0)
+
+
+def main(config: Config) -> Path:
+    tasks = [(name, speed) for name in PROBLEMS for speed in config.speeds_kmh]
+    # The uplift is calibrated once per catenary and speed, here, so the workers need not repeat it.
+    uplift = {(name, speed): get_problem(name).uplift_force(speed, config.fidelity) for name, speed in tasks}
+    jobs = [(name, (s,), speed, config.fidelity, uplift[(name, speed)])
+            for name, speed in tasks for s in config.presags]
+    with ProcessPoolExecutor(max_workers=config.workers) as pool:
+        results = list(pool.map(evaluate_problem, *zip(*jobs, strict=True)))
+    rows = []
+    for (name, (s,), speed, _, force), ev in zip(jobs, results, strict=True):
+        stats = ev.statistics
+        rows.append({"problem": name, "catenary": get_problem(name).catenary, "speed_kmh": speed, "presag_m": s,
+                     "feasible": int(ev.feasible), "sigma_N": stats.std if stats else float("nan"),
+                     "mean_N": stats.mean if stats else float("nan"), "uplift_N": force, "reason": ev.reason})
+    folder = study_dir(config.out, NAME)
+    write_csv(folder / "presag.csv", rows)
+    report(folder)
+    return folder
+
+
+def best_presag(rows: list[dict]) -> list[dict]:
+    """The feasible pre-sag with the lowest σ per problem and speed."""
+    out = []
+    for name in dict.fromkeys(r["problem"] for r in rows):
+        for speed in sorted({r["speed_kmh"] for r in rows if r["problem"] == name}):
+            candidates = [r for r in rows if r["problem"] == name and r["speed_kmh"] == speed and r["feasible"]]
+            level = next((r for r in candidates if r["presag_m"] == 0.0), None)
+            if candidates:
+                best = min(candidates, key=lambda r: r["sigma_N"])
+                out.append({"problem": name, "speed_kmh": speed, "best_presag_m": best["presag_m"],
+                            "sigma_N": best["sigma_N"], "level_sigma_N": level["sigma_N"] if level else float("nan")})
+    return out
+
+
+def report(folder: Path) -> str:
+    """Tables and figures from the CSV (no simulation)."""
+    rows = read_csv(folder / "presag.csv")
+    best = best_presag(rows)
+    for b in best:
+        b["reduction_percent"] = 100.0 * (1.0 - b["sigma_N"] / b["level_sigma_N"])
+    table = markdown_table(best, [("problem", "problem", "s"), ("speed_kmh", "speed (km/h)", "g"),
+                                  ("best_presag_m", "best pre-sag (m)", ".2f"), ("sigma_N", "σ (N)", ".2f"),
+                                  ("level_sigma_N", "σ level (N)", ".2f"), ("reduction_percent", "reduction (%)", ".1f")])
+    (folder / "presag.md").write_text(table + "\n", encoding="utf-8")
+    _figure(rows, best, folder / "presag.png")
+    return table
+
+
+def _figure(rows: list[dict], best: list[dict], path: Path) -> None:
+    from catenary_env.plots import pyplot
+
+    plt = pyplot()
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4))
+    for i, name in enumerate(PROBLEMS):
+        pick = [r for r in rows if r["problem"] == name and r["speed_kmh"] == 300.0]
+        if pick:
+            feasible = [r for r in pick if r["feasible"]]
+            left.plot([1e3 * r["presag_m"] for r in feasible], [r["sigma_N"] for r in feasible], "o-",
+                      color=f"C{i}", label=f"{pick[0]['catenary']} ({name})")
+        b = [r for r in best if r["problem"] == name]
+        right.plot([r["speed_kmh"] for r in b], [1e3 * r["best_presag_m"] for r in b], "o-", color=f"C{i}", label=name)
+    left.set_xlabel("pre-sag at mid-span (mm)")
+    left.set_ylabel("σ of the contact force (N)")
+    left.set_title("300 km/h")
+    left.legend()
+    right.set_xlabel("speed (km/h)")
+    right.set_ylabel("best pre-sag (mm)")
+    right.set_title("best pre-sag against speed")
+    right.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def cli(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--full", action="store_true", help="20 spans on the 1 cm grid (hours) instead of quick")
+    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
+    args = parser.parse_args(argv)
+    print(report(main(Config(full=args.full, out=args.out, workers=args.workers))))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(cli())
