@@ -1,0 +1,58 @@
+"""The ``catenary`` command line: JSON for scripts, clear errors before any solve, help with units."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from catenary_env.cli import main
+
+
+def test_static_json_gives_dropper_lengths_and_forces(capsys):
+    assert main(["static", "benchmark", "--fidelity", "test", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["feasible"] and len(out["dropper_lengths"]) == 9
+    assert sum(out["dropper_forces"]) > 600.0  # the span's contact wire weighs about 730 N
+
+
+def test_simulate_json_gives_the_statistics(capsys):
+    assert main(["simulate", "en50318-2002", "--speed", "250", "--fidelity", "test", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    stats = out["statistics"]
+    assert 80.0 < stats["mean"] < 130.0 and stats["std"] > 0.0
+    assert out["uplift_force"] == pytest.approx(117.5)
+
+
+@pytest.mark.parametrize(
+    ("argv", "field"),
+    [
+        (["simulate", "benchmark", "--speed", "600"], "speed"),
+        (["simulate", "benchmark", "--speed", "-5", "--uplift", "150"], "speed"),
+        (["static", "benchmark", "--droppers", "5", "4", "46", "50", "--offsets", "0", "0", "0", "0"],
+         "dropper_positions"),
+        (["static", "benchmark", "--offsets", "0.9", "0.9", "0.9", "0.9", "0.9", "0.9", "0.9", "0.9", "0.9"],
+         "contact_wire_offsets"),
+        (["static", "benchmark", "--element", "0"], "fidelity.contact_wire_element"),
+        (["static", "no-such-preset"], "no-such-preset"),
+    ],
+)
+def test_bad_input_exits_2_naming_the_field(capsys, argv, field):
+    assert main(argv) == 2
+    assert field in capsys.readouterr().err
+
+
+def test_help_explains_options_with_units(capsys):
+    with pytest.raises(SystemExit):
+        main(["simulate", "--help"])
+    text = capsys.readouterr().out
+    assert "km/h" in text and "N" in text and "--plot" in text
+
+
+def test_presets_lists_and_copies(tmp_path, capsys):
+    assert main(["presets"]) == 0
+    assert "benchmark" in capsys.readouterr().out
+    target = tmp_path / "mine.toml"
+    assert main(["presets", "--copy", "benchmark", str(target)]) == 0
+    assert "[provenance]" in target.read_text()
+    assert main(["static", str(target), "--fidelity", "test", "--json"]) == 0
