@@ -1,0 +1,207 @@
+"""``catenary optimize``: run an optimiser on a design problem from the command line.
+
+    catenary optimize PROBLEM --optimizer NAME --budget N [--seed S] [--speed KMH] [--fidelity study|test]
+                      [--store PATH] [--resume] [--workers N] [--scheduler tcp://HOST:PORT] [--json]
+
+also available as ``python -m optimizers PROBLEM ...``. :func:`add_parser` adds the sub-command to the
+``catenary`` parser and :func:`run` executes it; bad input exits with status 2 and a message.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from typing import Any
+
+from . import ga, nevergrad_adapters  # noqa: F401  (register the built-in optimisers)
+from .base import OPTIMIZERS, OptimizationResult
+from .store import StoreError
+
+__all__ = ["DEFAULT_STORE", "add_arguments", "add_parser", "run"]
+
+DEFAULT_STORE = "catenary-runs.sqlite"
+"""Run store used when ``--store`` is not given (in the current directory)."""
+
+RL_OPTIMIZERS = ("ppo",)
+
+DESCRIPTION = (
+    "Optimise the design of a catenary problem (SPEC 4) with the study's genetic algorithm, a nevergrad "
+    "optimiser or a PPO design policy. Every evaluation is committed to an SQLite run store as it completes: "
+    "an interrupted run continues with --resume, and a design already simulated in the store is not "
+    "simulated again."
+)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the ``optimize`` options to a parser."""
+    names = sorted(OPTIMIZERS) + list(RL_OPTIMIZERS)
+    parser.add_argument(
+        "problem",
+        metavar="PROBLEM",
+        help="design problem: BPresag, B1, B2, B3, SWPresag, SW1, SW2, SW3 (SPEC 4), or a cheap "
+        "synthetic one for trying things out: synthetic-quadratic, synthetic-quadratic-slow",
+    )
+    parser.add_argument(
+        "--optimizer",
+        default="ga",
+        choices=names,
+        metavar="NAME",
+        help=f"optimiser, one of: {', '.join(names)} (default: ga, the study's genetic algorithm)",
+    )
+    parser.add_argument(
+        "--budget",
+        type=int,
+        required=True,
+        metavar="N",
+        help="simulations the run may spend (an integer >= 1); re-evaluating a design the run has "
+        "already seen is free, and a ppo run takes exactly N env steps",
+    )
+    parser.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        metavar="S",
+        help="random seed (an integer >= 0); the same seed gives the same run (default: 0)",
+    )
+    parser.add_argument(
+        "--speed", type=float, default=300.0, metavar="KMH", help="design train speed, km/h (default: 300)"
+    )
+    parser.add_argument(
+        "--speed-range",
+        type=float,
+        nargs=2,
+        default=None,
+        metavar=("LO", "HI"),
+        help="ppo only: train a speed-conditioned policy over speeds LO..HI km/h, drawn per episode",
+    )
+    parser.add_argument(
+        "--fidelity",
+        choices=("study", "test"),
+        default="study",
+        help="'study': 20 spans, statistics on the 10 central ones, 1 ms time step; 'test': 5 spans, "
+        "coarse mesh, for trying things out only (default: study)",
+    )
+    parser.add_argument(
+        "--store",
+        default=DEFAULT_STORE,
+        metavar="PATH",
+        help=f"SQLite run store file, created if absent (default: ./{DEFAULT_STORE}); "
+        "':memory:' keeps nothing",
+    )
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the latest run in the store with the same problem, optimiser, budget, seed, "
+        "speed and fidelity: its stored evaluations are replayed, not simulated",
+    )
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        metavar="N",
+        help="local worker processes for the simulations; 1 simulates in this process "
+        f"(default: the number of CPUs, {os.cpu_count() or 1})",
+    )
+    parser.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="tcp://HOST:PORT",
+        help="address of a Dask distributed scheduler: send the simulations to that cluster "
+        "instead of local processes (needs catenary-env[parallel])",
+    )
+    parser.add_argument(
+        "--max-evaluations",
+        type=int,
+        default=None,
+        metavar="N",
+        help="cap on evaluations including free repeats of designs already seen (default: 10 x the budget)",
+    )
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        help="print the result (best design in m, best sigma in N, the full history) as JSON",
+    )
+    parser.add_argument("--quiet", action="store_true", help="no progress line on stderr")
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add ``optimize`` to the sub-commands of the ``catenary`` command."""
+    parser: argparse.ArgumentParser = subparsers.add_parser(
+        "optimize", help="optimise a design problem (GA, nevergrad, PPO)", description=DESCRIPTION
+    )
+    add_arguments(parser)
+    return parser
+
+
+def run(args: argparse.Namespace) -> int:
+    """Execute ``optimize``; return the exit status (0, or 2 for bad input)."""
+    try:
+        result = _run_optimizer(args) if args.optimizer not in RL_OPTIMIZERS else _run_rl(args)
+    except (StoreError, ImportError, ValueError, TypeError) as error:
+        print(f"optimize: error: {error}", file=sys.stderr)
+        return 2
+    except KeyError as error:
+        print(f"optimize: error: {error.args[0] if error.args else error}", file=sys.stderr)
+        return 2
+    if args.json:
+        print(json.dumps(result.to_dict()))
+    else:
+        print(_summary(result, args.store))
+    return 0
+
+
+def _run_optimizer(args: argparse.Namespace) -> OptimizationResult:
+    from .runner import optimize
+
+    if args.speed_range is not None:
+        raise ValueError("--speed-range is for --optimizer ppo; the other optimisers design for one --speed")
+    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+    return optimize(
+        args.problem, args.optimizer, args.budget, args.seed, speed_kmh=args.speed, fidelity=args.fidelity,
+        store=args.store, resume=args.resume, n_workers=workers, scheduler=args.scheduler,
+        max_evaluations=args.max_evaluations, quiet=args.quiet,
+    )  # fmt: skip
+
+
+def _run_rl(args: argparse.Namespace) -> OptimizationResult:
+    from .problem import catenary_problem
+    from .rl import EnvSpec, train_design_policy
+
+    if args.scheduler or (args.workers or 1) > 1:
+        print(
+            "optimize: note: ppo steps its env in this process; --workers/--scheduler are ignored",
+            file=sys.stderr,
+        )
+    try:
+        from catenary_env.envs import register_envs
+    except ImportError as error:
+        raise ImportError(f"ppo needs the design envs: pip install catenary-env[gym] ({error})") from error
+    register_envs()
+    problem = catenary_problem(args.problem)
+    speed_range = tuple(args.speed_range) if args.speed_range is not None else None
+    spec = EnvSpec(
+        f"Catenary-{problem.name}-v0", None if speed_range else args.speed, speed_range, args.fidelity
+    )
+    _, result = train_design_policy(
+        spec, problem, args.budget, args.seed, store=args.store, resume=args.resume, quiet=args.quiet
+    )
+    return result
+
+
+def _summary(result: OptimizationResult, store: str) -> str:
+    lines = [
+        f"{result.optimizer} on {result.problem} (seed {result.seed}): stopped by {result.stop_reason} after "
+        f"{result.n_simulations}/{result.budget} simulations, {len(result.history)} evaluations; "
+        f"run {result.run_id} in {store}",
+    ]
+    if result.best_x is None:
+        lines.append("no feasible design found")
+    else:
+        lines.append(f"best sigma = {result.best_sigma:.4f} N at")
+        lines.extend(
+            f"  {name} = {value:.3f} m"
+            for name, value in zip(result.variable_names, result.best_x, strict=True)
+        )
+    return "\n".join(lines)

@@ -1,0 +1,187 @@
+"""Parallel evaluation of a batch of designs: in-process, local worker processes, or a Dask cluster.
+
+A backend takes one picklable ``simulate`` function and a batch of argument tuples and yields
+``(position, outcome)`` pairs as the simulations complete, so that the caller can store each result at
+once. The batch is what the optimiser asked for (a GA generation, a nevergrad batch); which backend runs
+it does not change the results, because each simulation is deterministic and the caller puts the
+outcomes back in the batch's order before telling the optimiser.
+
+- :class:`InProcessBackend`: one after the other in this process (``n_workers=1``).
+- :class:`ProcessPoolBackend`: ``n_workers`` local processes (``concurrent.futures``, spawned, so that
+  nothing of the parent's threads is inherited).
+- :class:`DaskBackend`: a Dask distributed cluster at a scheduler address (``pip install
+  catenary-env[parallel]``).
+
+Examples
+--------
+>>> from optimizers.synthetic import get_synthetic_problem
+>>> problem = get_synthetic_problem("synthetic-quadratic")
+>>> with make_backend(n_workers=1) as backend:
+...     results = dict(backend.run(problem.simulate, [((0.0, 0.0, 0.0), 300.0, "test")]))
+>>> round(results[0].sigma, 2)
+21.75
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import multiprocessing
+from collections.abc import Iterator, Sequence
+from types import TracebackType
+from typing import Any, Protocol
+
+from .problem import Outcome, SimulateFunction
+
+__all__ = [
+    "DaskBackend",
+    "EvaluationBackend",
+    "InProcessBackend",
+    "ProcessPoolBackend",
+    "SimulationArguments",
+    "make_backend",
+]
+
+SimulationArguments = tuple[tuple[float, ...], float, str]
+"""``(x, speed_kmh, fidelity)``: the arguments of one call of a problem's ``simulate``."""
+
+
+class EvaluationBackend(Protocol):
+    """Runs batches of simulations; a context manager that releases its workers on exit."""
+
+    description: str
+
+    def run(
+        self, simulate: SimulateFunction, batch: Sequence[SimulationArguments]
+    ) -> Iterator[tuple[int, Outcome]]:
+        """Yield ``(position in batch, outcome)`` as each simulation completes."""
+        ...
+
+    def close(self) -> None: ...
+
+    def __enter__(self) -> EvaluationBackend: ...
+
+    def __exit__(
+        self, kind: type[BaseException] | None, error: BaseException | None, trace: TracebackType | None
+    ) -> None: ...
+
+
+class _Closing:
+    """Context-manager plumbing shared by the backends."""
+
+    def close(self) -> None:
+        """Release the workers."""
+
+    def __enter__(self) -> Any:
+        return self
+
+    def __exit__(
+        self, kind: type[BaseException] | None, error: BaseException | None, trace: TracebackType | None
+    ) -> None:
+        self.close()
+
+
+class InProcessBackend(_Closing):
+    """Simulate one design after the other in this process."""
+
+    description = "in-process"
+
+    def run(
+        self, simulate: SimulateFunction, batch: Sequence[SimulationArguments]
+    ) -> Iterator[tuple[int, Outcome]]:
+        for position, arguments in enumerate(batch):
+            yield position, simulate(*arguments)
+
+
+class ProcessPoolBackend(_Closing):
+    """Simulate on ``n_workers`` local worker processes.
+
+    Parameters
+    ----------
+    n_workers : int
+        Worker processes, >= 1. They are started once and kept for the whole run, so that each one's
+        per-process caches (presets, the pantograph's uplift calibration) are filled only once.
+    """
+
+    def __init__(self, n_workers: int) -> None:
+        if n_workers < 1:
+            raise ValueError(f"n_workers = {n_workers}: must be at least 1")
+        self.description = f"{n_workers} local processes"
+        context = multiprocessing.get_context("spawn")
+        self._pool = concurrent.futures.ProcessPoolExecutor(max_workers=n_workers, mp_context=context)
+
+    def run(
+        self, simulate: SimulateFunction, batch: Sequence[SimulationArguments]
+    ) -> Iterator[tuple[int, Outcome]]:
+        futures = {
+            self._pool.submit(simulate, *arguments): position for position, arguments in enumerate(batch)
+        }
+        try:
+            for future in concurrent.futures.as_completed(futures):
+                yield futures[future], future.result()
+        finally:
+            for future in futures:
+                future.cancel()
+
+    def close(self) -> None:
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+    def __exit__(
+        self, kind: type[BaseException] | None, error: BaseException | None, trace: TracebackType | None
+    ) -> None:
+        # On an error or Ctrl-C, do not wait for the simulations in flight: their results are lost anyway.
+        self._pool.shutdown(wait=kind is None, cancel_futures=True)
+
+
+class DaskBackend(_Closing):
+    """Simulate on a Dask distributed cluster.
+
+    Parameters
+    ----------
+    scheduler : str
+        The scheduler's address, e.g. ``"tcp://10.0.0.5:8786"``. The workers must be able to import
+        ``optimizers`` and ``catenary_env`` (install the package on them).
+    """
+
+    def __init__(self, scheduler: str) -> None:
+        try:
+            from distributed import Client
+        except ImportError as error:
+            raise ImportError(
+                "--scheduler needs Dask distributed: pip install catenary-env[parallel]"
+            ) from error
+        self.description = f"Dask cluster at {scheduler}"
+        self._client = Client(scheduler)
+
+    def run(
+        self, simulate: SimulateFunction, batch: Sequence[SimulationArguments]
+    ) -> Iterator[tuple[int, Outcome]]:
+        from distributed import as_completed
+
+        # pure=False: never let Dask merge calls by their arguments; the run store is the cache.
+        futures = [self._client.submit(simulate, *arguments, pure=False) for arguments in batch]
+        positions = {future.key: position for position, future in enumerate(futures)}
+        try:
+            for future in as_completed(futures):
+                yield positions[future.key], Outcome(*future.result())
+        finally:
+            self._client.cancel(futures)
+
+    def close(self) -> None:
+        self._client.close()
+
+
+def make_backend(n_workers: int = 1, scheduler: str | None = None) -> EvaluationBackend:
+    """The backend for the options: a Dask cluster if ``scheduler`` is given, else local processes.
+
+    Parameters
+    ----------
+    n_workers : int
+        Local worker processes; 1 simulates in this process. Ignored with ``scheduler``.
+    scheduler : str, optional
+        Dask scheduler address, ``tcp://HOST:PORT``.
+    """
+    if scheduler:
+        return DaskBackend(scheduler)
+    if n_workers == 1:
+        return InProcessBackend()
+    return ProcessPoolBackend(n_workers)

@@ -1,0 +1,392 @@
+"""RL design policies: stable-baselines3 PPO trained on a design env (``pip install catenary-env[rl]``).
+
+A design env (SPEC 5) has one-step episodes: the observation carries the task context (the normalised
+speed), the action in ``Box(-1, 1)`` is the whole design, the reward is −σ. Trained with a speed range,
+the policy is speed-conditioned: ``design = policy(speed)``, something no single-speed optimiser gives.
+
+The env contract this module relies on, and nothing else, so it works on any Gymnasium env with it:
+
+- ``gymnasium.make(env_id, speed_kmh=..., speed_range=..., fidelity=...)`` builds it;
+- ``reset(options={"speed_kmh": v})`` sets the speed of the episode (used by :func:`design_for_speed`);
+- the action maps to the design affinely onto the bounds and then onto the grid (ties up);
+- ``step`` returns the reward −σ (or a penalty) and ``info["feasible"]``; ``info["reason"]``,
+  ``info["objective"]`` (σ behind the reward, N), ``info["wall_time"]`` (s) and ``info["speed_kmh"]``
+  are used where present (σ falls back to −reward, the speed to the run's).
+
+Every step is a simulation and is charged: ``total_timesteps`` is the budget, and training stops after
+exactly ``budget`` steps. A wrapper logs each step into the run's history and its store, so an
+interrupted training run resumes like the other optimisers: the stored steps are replayed (the env is
+reset but not stepped, the stored reward is returned) and PPO, seeded, takes the same actions again.
+The env owns its simulations and reward convention, so RL runs neither use nor feed the design cache.
+
+Examples
+--------
+>>> spec = EnvSpec("Catenary-B1-v0", speed_kmh=None, speed_range=(200.0, 320.0), fidelity="study")
+>>> policy, result = train_design_policy(spec, catenary_problem("B1"), budget=2000, seed=0)  # doctest: +SKIP
+>>> design_for_speed(policy, catenary_problem("B1"), 280.0)  # doctest: +SKIP
+array([...])
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import time
+from contextlib import ExitStack
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .base import EvaluationRecord, OptimizationResult
+from .problem import GridProblem, GridSpace
+from .progress import ProgressDisplay
+from .recorder import RunRecorder, open_run, package_version
+from .store import RunConfig, RunStore
+
+__all__ = [
+    "DesignPolicy",
+    "EnvSpec",
+    "ObservationScaling",
+    "PPOOptions",
+    "design_for_speed",
+    "import_stable_baselines3",
+    "train_design_policy",
+]
+
+
+def import_stable_baselines3() -> Any:
+    """The stable_baselines3 module, or an ImportError that says how to install it."""
+    try:
+        import stable_baselines3
+    except ImportError as error:
+        raise ImportError(
+            "the RL design policies need stable-baselines3: pip install catenary-env[rl]"
+        ) from error
+    return stable_baselines3
+
+
+@dataclass(frozen=True)
+class EnvSpec:
+    """How to make the design env (picklable; recorded with the run).
+
+    Attributes
+    ----------
+    env_id : str
+        Registered Gymnasium id, e.g. ``"Catenary-B1-v0"``.
+    speed_kmh : float or None
+        Train speed, km/h; None with ``speed_range``.
+    speed_range : (float, float) or None
+        Lowest and highest speed, km/h, drawn at each reset: a speed-conditioned policy.
+    fidelity : str
+        ``"study"`` or ``"test"``.
+    """
+
+    env_id: str
+    speed_kmh: float | None = 300.0
+    speed_range: tuple[float, float] | None = None
+    fidelity: str = "study"
+
+    def make(self) -> Any:
+        """Build the env with ``gymnasium.make``."""
+        import gymnasium
+
+        if self.speed_range is not None:
+            return gymnasium.make(self.env_id, speed_range=tuple(self.speed_range), fidelity=self.fidelity)
+        return gymnasium.make(self.env_id, speed_kmh=self.speed_kmh, fidelity=self.fidelity)
+
+
+@dataclass(frozen=True)
+class PPOOptions:
+    """PPO hyper-parameters (stable-baselines3 names).
+
+    Attributes
+    ----------
+    learning_rate : float
+        Adam step size.
+    n_steps : int
+        Env steps (designs) per rollout, between policy updates.
+    batch_size : int
+        Minibatch size of an update.
+    n_epochs : int
+        Passes over a rollout per update.
+    ent_coef : float
+        Entropy bonus.
+    net_arch : tuple of int
+        Hidden layer widths of the policy and value networks.
+    log_std_init : float
+        Initial log standard deviation of the Gaussian actions (in action units, the range being 2).
+    normalize_observation : bool
+        Standardise observations with running statistics (SB3's ``VecNormalize``). The speed enters the
+        observation as a fraction of the wave speed, a narrow band (0.43 to 0.70 for 200 to 320 km/h on
+        the benchmark catenary): standardised, it spans a few units, which a policy conditions on far
+        more easily. The statistics are kept with the policy for :func:`design_for_speed`.
+    normalize_reward : bool
+        Scale rewards by their running standard deviation (SB3's ``VecNormalize``); the history and
+        the store keep the env's own rewards.
+    device : str
+        Torch device; ``"cpu"`` suits these small networks.
+    """
+
+    learning_rate: float = 3e-4
+    n_steps: int = 64
+    batch_size: int = 64
+    n_epochs: int = 10
+    ent_coef: float = 0.0
+    net_arch: tuple[int, ...] = (64, 64)
+    log_std_init: float = 0.0
+    normalize_observation: bool = True
+    normalize_reward: bool = True
+    device: str = "cpu"
+
+
+class ObservationScaling(NamedTuple):
+    """SB3 ``VecNormalize``'s observation standardisation, frozen at the end of training.
+
+    Attributes
+    ----------
+    mean, var : ndarray
+        Running mean and variance of the observations.
+    epsilon : float
+        Added to the variance.
+    clip : float
+        Standardised observations are clipped to ``[-clip, clip]``.
+    """
+
+    mean: NDArray[np.float64]
+    var: NDArray[np.float64]
+    epsilon: float
+    clip: float
+
+    def apply(self, observation: NDArray[np.float32]) -> NDArray[np.float32]:
+        """The observation as the policy saw it in training."""
+        scaled = (np.asarray(observation) - self.mean) / np.sqrt(self.var + self.epsilon)
+        return np.clip(scaled, -self.clip, self.clip).astype(np.float32)
+
+
+@dataclass(frozen=True)
+class DesignPolicy:
+    """A trained design policy: the PPO model and the env it was trained on.
+
+    Attributes
+    ----------
+    model : stable_baselines3.PPO
+        The trained model.
+    env_spec : EnvSpec
+        The env (its observations are what the policy reads).
+    observation_scaling : ObservationScaling or None
+        How observations were standardised in training (None: not at all).
+    """
+
+    model: Any
+    env_spec: EnvSpec
+    observation_scaling: ObservationScaling | None = None
+
+
+def _recording_wrapper_class() -> type:
+    """The wrapper class, built on first use so that gymnasium is imported only here."""
+    import gymnasium
+
+    class RecordingWrapper(gymnasium.Wrapper):
+        """Log every step into the run (history, store); replay the steps a resumed run has stored."""
+
+        def __init__(self, env: Any, recorder: RunRecorder, space: GridSpace) -> None:
+            super().__init__(env)
+            self.recorder = recorder
+            self.space = space
+            self._observation: Any = None
+            self._speed = recorder.config.speed_kmh
+
+        def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> Any:
+            observation, info = self.env.reset(seed=seed, options=options)
+            self._observation = observation
+            self._speed = _scalar(info.get("speed_kmh"), self.recorder.config.speed_kmh)
+            return observation, info
+
+        def step(self, action: Any) -> Any:
+            x = self.space.action_to_design(action)
+            key = self.space.design_key(x)
+            index = self.recorder.next_index
+            stored = self.recorder.stored(index, key)
+            if stored is not None:
+                self.recorder.append(stored.record)
+                info = {"feasible": stored.record.feasible, "reason": stored.record.reason, "replayed": True}
+                reward = float(stored.reward if stored.reward is not None else -stored.record.loss)
+                return self._observation, reward, True, False, info
+            start = time.perf_counter()
+            observation, env_reward, terminated, truncated, info = self.env.step(action)
+            record = _record(index, x, float(env_reward), info, time.perf_counter() - start, self._speed)
+            self.recorder.persist(record, key, reward=float(env_reward))
+            self.recorder.append(record)
+            return observation, env_reward, terminated, truncated, info
+
+    return RecordingWrapper
+
+
+def _scalar(value: Any, default: float | None) -> float | None:
+    if value is None or np.ndim(value) != 0:
+        return default
+    return float(value)
+
+
+def _record(
+    index: int,
+    x: NDArray[np.float64],
+    reward: float,
+    info: dict[str, Any],
+    elapsed: float,
+    speed: float | None,
+) -> EvaluationRecord:
+    feasible = bool(info.get("feasible", True))
+    sigma = _scalar(info.get("objective"), -reward) if feasible else None
+    speed_kmh = _scalar(info.get("speed_kmh"), speed)
+    if speed_kmh is None:
+        raise ValueError("the env reports no speed: with a speed range, its info must carry 'speed_kmh'")
+    return EvaluationRecord(
+        index=index,
+        x=tuple(float(v) for v in x),
+        feasible=feasible,
+        sigma=sigma,
+        reason=str(info.get("reason", "")),
+        wall_time=float(_scalar(info.get("wall_time"), elapsed) or 0.0),
+        cached=False,
+        charged=True,
+        speed_kmh=speed_kmh,
+    )
+
+
+def train_design_policy(
+    env_spec: EnvSpec,
+    problem: GridProblem,
+    budget: int,
+    seed: int = 0,
+    *,
+    options: PPOOptions | None = None,
+    store: RunStore | str | os.PathLike[str] | None = None,
+    resume: bool = False,
+    quiet: bool = True,
+) -> tuple[DesignPolicy, OptimizationResult]:
+    """Train a PPO design policy for exactly ``budget`` env steps (simulations).
+
+    Parameters
+    ----------
+    env_spec : EnvSpec
+        The env to train on (with a speed range: a speed-conditioned policy).
+    problem : GridProblem
+        The problem of the env: its bounds and grid map actions to designs, its name goes in the store.
+    budget : int
+        Env steps = simulations = PPO's ``total_timesteps``.
+    seed : int
+        Seeds PPO (torch, numpy) and the env.
+    options : PPOOptions, optional
+        Hyper-parameters.
+    store : RunStore or path, optional
+        Run store; default in memory.
+    resume : bool
+        Continue the latest stored run of the same configuration (replaying its steps).
+    quiet : bool
+        No progress display.
+
+    Returns
+    -------
+    (DesignPolicy, OptimizationResult)
+        The policy, and the run's record (``best_x``: the best design met in training, at its speed).
+    """
+    sb3 = import_stable_baselines3()
+    if budget < 1:
+        raise ValueError(f"budget = {budget}: must be at least 1 simulation")
+    settings = PPOOptions() if options is None else options
+    space = GridSpace.from_problem(problem)
+    run_options = {"env": dataclasses.asdict(env_spec), "ppo": dataclasses.asdict(settings)}
+    speed = None if env_spec.speed_range is not None else env_spec.speed_kmh
+    config = RunConfig(
+        "ppo", space.name, int(budget), int(seed), speed, env_spec.fidelity,
+        json.dumps(run_options, sort_keys=True), package_version(),
+    )  # fmt: skip
+    with ExitStack() as stack:
+        run_store = (
+            store if isinstance(store, RunStore) else stack.enter_context(RunStore(store or ":memory:"))
+        )
+        run_id = open_run(run_store, config, resume)
+        progress = ProgressDisplay(f"ppo on {space.name}", int(budget), quiet=quiet)
+        recorder = RunRecorder(run_store, run_id, config, space, "env", progress)
+        vec_env = _vector_env(env_spec, recorder, space, settings)
+        stack.callback(vec_env.close)
+        model = sb3.PPO(
+            "MlpPolicy", vec_env, learning_rate=settings.learning_rate, n_steps=settings.n_steps,
+            batch_size=settings.batch_size, n_epochs=settings.n_epochs, ent_coef=settings.ent_coef,
+            policy_kwargs={"net_arch": list(settings.net_arch), "log_std_init": settings.log_std_init},
+            seed=int(seed), device=settings.device, verbose=0,
+        )  # fmt: skip
+        model.learn(total_timesteps=int(budget), callback=_budget_callback(recorder, int(budget)))
+        result = recorder.result("budget")
+        scaling = _observation_scaling(vec_env) if settings.normalize_observation else None
+    return DesignPolicy(model, env_spec, scaling), result
+
+
+def _vector_env(env_spec: EnvSpec, recorder: RunRecorder, space: GridSpace, settings: PPOOptions) -> Any:
+    """One recorded env in SB3's vector interface, standardised as the options ask."""
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    wrapper = _recording_wrapper_class()
+    vec_env = DummyVecEnv([lambda: wrapper(env_spec.make(), recorder, space)])
+    if not (settings.normalize_observation or settings.normalize_reward):
+        return vec_env
+    # gamma = 0: an episode is one step, its return is its reward.
+    return VecNormalize(
+        vec_env, norm_obs=settings.normalize_observation, norm_reward=settings.normalize_reward, gamma=0.0
+    )
+
+
+def _budget_callback(recorder: RunRecorder, budget: int) -> Any:
+    """An SB3 callback that stops training right after the budget-th simulation."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class BudgetCallback(BaseCallback):
+        """Stop after the budget-th step, unless that step completes a rollout (PPO then learns from it
+        and stops by itself, since ``total_timesteps`` is the budget)."""
+
+        def _on_step(self) -> bool:
+            if recorder.n_charged < budget:
+                return True
+            return bool(self.locals["n_steps"] + 1 >= self.locals["n_rollout_steps"])
+
+    return BudgetCallback()
+
+
+def _observation_scaling(vec_env: Any) -> ObservationScaling:
+    """The observation statistics of a ``VecNormalize`` at the end of training."""
+    rms = vec_env.obs_rms
+    return ObservationScaling(
+        np.array(rms.mean), np.array(rms.var), float(vec_env.epsilon), float(vec_env.clip_obs)
+    )
+
+
+def design_for_speed(policy: DesignPolicy, problem: GridProblem, speed_kmh: float) -> NDArray[np.float64]:
+    """The design the policy gives for a speed: its deterministic action, mapped onto the grid.
+
+    Parameters
+    ----------
+    policy : DesignPolicy
+        A trained policy.
+    problem : GridProblem
+        Its problem (bounds and grid).
+    speed_kmh : float
+        Train speed, km/h (within the training range for a meaningful answer).
+
+    Returns
+    -------
+    ndarray, shape (n_variables,)
+        The design's variables, m, on the grid.
+    """
+    env = policy.env_spec.make()
+    try:
+        observation, _ = env.reset(seed=0, options={"speed_kmh": float(speed_kmh)})
+    finally:
+        env.close()
+    if policy.observation_scaling is not None:
+        observation = policy.observation_scaling.apply(observation)
+    action, _ = policy.model.predict(observation, deterministic=True)
+    return GridSpace.from_problem(problem).action_to_design(np.asarray(action).reshape(-1))

@@ -1,0 +1,359 @@
+"""The run store: an embedded SQLite file holding runs, their evaluations, and the evaluation cache.
+
+Every evaluation is committed as it completes, so a killed process loses at most the evaluations in
+flight (the file is in WAL mode; a commit survives the death of the process that made it). The same
+rows are the cache: an evaluation is identified by (problem, design on its grid, speed, fidelity), the
+design by the integers ``round(x / step)``, and a design evaluated once in a store is not simulated
+again by any run in it. Runs made by the RL trainer (whose simulations belong to a Gymnasium env and
+its reward convention) are stored with ``source = 'env'`` and are not served as cache.
+
+A run is identified by its configuration (:class:`RunConfig`); resuming a run replays its stored
+evaluations one by one in place of simulating them (see :func:`optimizers.runner.optimize`).
+
+The file carries a marker: SQLite's ``application_id`` header field is :data:`APPLICATION_ID` and its
+``user_version`` is :data:`SCHEMA_VERSION`. A file that is not SQLite, or an SQLite database without
+the marker (someone else's), or one of another schema version, is refused with :class:`StoreError`.
+
+The cache key does not include the simulator's version: a store holds the results of one version of the
+physics. The run table records the package version, and resuming a run made by another version is
+refused; for new runs after a change to the physics, start a new store.
+
+Examples
+--------
+>>> store = RunStore(":memory:")
+>>> config = RunConfig("ga", "synthetic-quadratic", 100, 1, 300.0, "test", "{}", "0.1.0")
+>>> run_id = store.start_run(config)
+>>> store.find_run(config) == run_id
+True
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import os
+import sqlite3
+from dataclasses import dataclass
+from pathlib import Path
+from types import TracebackType
+from typing import NamedTuple
+
+from .base import EvaluationRecord
+from .problem import Outcome
+
+__all__ = ["APPLICATION_ID", "SCHEMA_VERSION", "RunConfig", "RunStore", "StoreError", "StoredEvaluation"]
+
+APPLICATION_ID = 0x43415445
+"""SQLite ``application_id`` of a run store: the bytes ``CATE``."""
+
+SCHEMA_VERSION = 1
+"""SQLite ``user_version`` of the schema this code reads and writes."""
+
+_SQLITE_HEADER = b"SQLite format 3\x00"
+
+_SCHEMA = """
+CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
+CREATE TABLE runs (
+    run_id INTEGER PRIMARY KEY AUTOINCREMENT,
+    optimizer TEXT NOT NULL,
+    problem TEXT NOT NULL,
+    budget INTEGER NOT NULL,
+    seed INTEGER NOT NULL,
+    speed_kmh REAL,
+    fidelity TEXT NOT NULL,
+    options TEXT NOT NULL,
+    package_version TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    finished_at TEXT,
+    stop_reason TEXT
+);
+CREATE TABLE evaluations (
+    run_id INTEGER NOT NULL REFERENCES runs (run_id),
+    idx INTEGER NOT NULL,
+    problem TEXT NOT NULL,
+    design_key TEXT NOT NULL,
+    speed_kmh REAL NOT NULL,
+    fidelity TEXT NOT NULL,
+    source TEXT NOT NULL,
+    x TEXT NOT NULL,
+    feasible INTEGER NOT NULL,
+    sigma REAL,
+    reason TEXT NOT NULL,
+    wall_time REAL NOT NULL,
+    cached INTEGER NOT NULL,
+    charged INTEGER NOT NULL,
+    reward REAL,
+    created_at TEXT NOT NULL,
+    PRIMARY KEY (run_id, idx)
+);
+CREATE INDEX evaluations_cache ON evaluations (problem, design_key, speed_kmh, fidelity, source);
+"""
+
+
+class StoreError(RuntimeError):
+    """The run store cannot be used: not a run store, another schema, or a run that cannot be resumed."""
+
+
+class RunConfig(NamedTuple):
+    """What identifies a run: resuming looks for a stored run with the same configuration.
+
+    Attributes
+    ----------
+    optimizer : str
+        Registry name of the optimiser.
+    problem : str
+        Problem id.
+    budget : int
+        Simulations allowed.
+    seed : int
+        Random seed.
+    speed_kmh : float or None
+        Design speed, km/h; None for a policy trained over a speed range.
+    fidelity : str
+        Model fidelity.
+    options : str
+        The optimiser's hyper-parameters as canonical JSON (sorted keys).
+    package_version : str
+        Version of catenary-env that made the run.
+    """
+
+    optimizer: str
+    problem: str
+    budget: int
+    seed: int
+    speed_kmh: float | None
+    fidelity: str
+    options: str
+    package_version: str
+
+
+@dataclass(frozen=True)
+class StoredEvaluation:
+    """An evaluation row of a run, as read back for a replay.
+
+    Attributes
+    ----------
+    record : EvaluationRecord
+        The evaluation.
+    design_key : tuple of int
+        Its design on the grid, ``round(x / step)``.
+    reward : float or None
+        The env's reward (RL runs only).
+    """
+
+    record: EvaluationRecord
+    design_key: tuple[int, ...]
+    reward: float | None
+
+
+def _now() -> str:
+    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="milliseconds")
+
+
+def _key_text(design_key: tuple[int, ...]) -> str:
+    return ",".join(str(int(k)) for k in design_key)
+
+
+class RunStore:
+    """An open run store (a context manager; :meth:`close` when done).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The SQLite file, created if absent; ``":memory:"`` for a store that lives as long as the object.
+
+    Raises
+    ------
+    StoreError
+        The file is not SQLite, or an SQLite database that is not a run store of this schema version.
+    """
+
+    def __init__(self, path: str | os.PathLike[str]) -> None:
+        self.path = str(path)
+        if self.path != ":memory:":
+            _check_header(Path(self.path))
+        try:
+            self._connection = sqlite3.connect(self.path, timeout=60.0)
+            self._open()
+        except sqlite3.DatabaseError as error:
+            if hasattr(self, "_connection"):
+                self._connection.close()
+            raise StoreError(f"{self.path}: not a usable SQLite run store ({error})") from error
+
+    def _open(self) -> None:
+        connection = self._connection
+        application_id = connection.execute("PRAGMA application_id").fetchone()[0]
+        n_tables = connection.execute("SELECT count(*) FROM sqlite_master").fetchone()[0]
+        if application_id == 0 and n_tables == 0:
+            self._create()
+        elif application_id != APPLICATION_ID:
+            connection.close()
+            raise StoreError(
+                f"{self.path}: an SQLite database that is not a catenary-env run store (application_id "
+                f"{application_id:#x}, expected {APPLICATION_ID:#x}); refusing to write into it: "
+                "give another --store path"
+            )
+        version = connection.execute("PRAGMA user_version").fetchone()[0]
+        if version != SCHEMA_VERSION:
+            connection.close()
+            raise StoreError(
+                f"{self.path}: run store schema version {version}, this code reads version {SCHEMA_VERSION}"
+            )
+        if self.path != ":memory:":
+            # WAL: a committed evaluation survives a SIGKILL; NORMAL sync is durable against a process
+            # crash (only a power cut can lose the last commits).
+            connection.execute("PRAGMA journal_mode=WAL")
+            connection.execute("PRAGMA synchronous=NORMAL")
+
+    def _create(self) -> None:
+        with self._connection:
+            self._connection.executescript(_SCHEMA)
+            self._connection.execute(f"PRAGMA application_id = {APPLICATION_ID}")
+            self._connection.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+            self._connection.execute(
+                "INSERT INTO meta (key, value) "
+                "VALUES ('format', 'catenary-env run store'), ('created_at', ?)",
+                (_now(),),
+            )
+
+    # -- runs ----------------------------------------------------------------------------------------------
+
+    def start_run(self, config: RunConfig) -> int:
+        """Create a run; return its id."""
+        with self._connection:
+            cursor = self._connection.execute(
+                "INSERT INTO runs (optimizer, problem, budget, seed, speed_kmh, fidelity, options, "
+                "package_version, created_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                (*config, _now()),
+            )
+        assert cursor.lastrowid is not None
+        return int(cursor.lastrowid)
+
+    def find_run(self, config: RunConfig) -> int | None:
+        """The latest run with this configuration (any package version), or None.
+
+        Raises
+        ------
+        StoreError
+            That run was made by another package version (its physics may differ).
+        """
+        row = self._connection.execute(
+            "SELECT run_id, package_version FROM runs WHERE optimizer = ? AND problem = ? AND budget = ? "
+            "AND seed = ? AND speed_kmh IS ? AND fidelity = ? AND options = ? ORDER BY run_id DESC LIMIT 1",
+            tuple(config[:7]),
+        ).fetchone()
+        if row is None:
+            return None
+        if row[1] != config.package_version:
+            raise StoreError(
+                f"{self.path}: run {row[0]} was made by catenary-env {row[1]}, this is "
+                f"{config.package_version}; its results may differ: resume it with that version, "
+                "or start the run in a new store"
+            )
+        return int(row[0])
+
+    def finish_run(self, run_id: int, stop_reason: str) -> None:
+        """Record that a run ended, and why."""
+        with self._connection:
+            self._connection.execute(
+                "UPDATE runs SET finished_at = ?, stop_reason = ? WHERE run_id = ?",
+                (_now(), stop_reason, run_id),
+            )
+
+    def runs(self) -> list[dict[str, object]]:
+        """Every run as a dict of its columns, oldest first."""
+        cursor = self._connection.execute("SELECT * FROM runs ORDER BY run_id")
+        names = [column[0] for column in cursor.description]
+        return [dict(zip(names, row, strict=True)) for row in cursor.fetchall()]
+
+    # -- evaluations ---------------------------------------------------------------------------------------
+
+    def add_evaluation(
+        self,
+        run_id: int,
+        problem: str,
+        fidelity: str,
+        design_key: tuple[int, ...],
+        record: EvaluationRecord,
+        source: str = "simulation",
+        reward: float | None = None,
+    ) -> None:
+        """Write (and commit) one evaluation of a run."""
+        with self._connection:
+            self._connection.execute(
+                "INSERT INTO evaluations (run_id, idx, problem, design_key, speed_kmh, fidelity, source, x, "
+                "feasible, sigma, reason, wall_time, cached, charged, reward, created_at) "
+                "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                (
+                    run_id, record.index, problem, _key_text(design_key), float(record.speed_kmh), fidelity,
+                    source, json.dumps(list(record.x)), int(record.feasible), record.sigma, record.reason,
+                    float(record.wall_time), int(record.cached), int(record.charged), reward, _now(),
+                ),
+            )  # fmt: skip
+
+    def evaluations(self, run_id: int) -> dict[int, StoredEvaluation]:
+        """The stored evaluations of a run by index (gaps where evaluations were lost in flight)."""
+        rows = self._connection.execute(
+            "SELECT idx, x, feasible, sigma, reason, wall_time, cached, charged, speed_kmh, design_key, "
+            "reward FROM evaluations WHERE run_id = ? ORDER BY idx",
+            (run_id,),
+        ).fetchall()
+        stored: dict[int, StoredEvaluation] = {}
+        for idx, x, feasible, sigma, reason, wall_time, cached, charged, speed, key, reward in rows:
+            record = EvaluationRecord(
+                int(idx), tuple(float(v) for v in json.loads(x)), bool(feasible),
+                None if sigma is None else float(sigma), str(reason), float(wall_time), bool(cached),
+                bool(charged), float(speed),
+            )  # fmt: skip
+            design_key = tuple(int(k) for k in key.split(",")) if key else ()
+            stored[int(idx)] = StoredEvaluation(record, design_key, None if reward is None else float(reward))
+        return stored
+
+    def lookup(
+        self, problem: str, design_key: tuple[int, ...], speed_kmh: float, fidelity: str
+    ) -> Outcome | None:
+        """The cached outcome of a design (any run of this store), or None if never simulated here."""
+        row = self._connection.execute(
+            "SELECT feasible, sigma, reason, wall_time FROM evaluations WHERE problem = ? AND design_key = ? "
+            "AND speed_kmh = ? AND fidelity = ? AND source = 'simulation' ORDER BY cached LIMIT 1",
+            (problem, _key_text(design_key), float(speed_kmh), fidelity),
+        ).fetchone()
+        if row is None:
+            return None
+        return Outcome(bool(row[0]), None if row[1] is None else float(row[1]), str(row[2]), float(row[3]))
+
+    def count_evaluations(self, run_id: int | None = None) -> int:
+        """Evaluations stored (of one run, or of all)."""
+        if run_id is None:
+            return int(self._connection.execute("SELECT count(*) FROM evaluations").fetchone()[0])
+        query = "SELECT count(*) FROM evaluations WHERE run_id = ?"
+        return int(self._connection.execute(query, (run_id,)).fetchone()[0])
+
+    # -- lifetime ------------------------------------------------------------------------------------------
+
+    def close(self) -> None:
+        """Close the connection (committed data is already on disk)."""
+        self._connection.close()
+
+    def __enter__(self) -> RunStore:
+        return self
+
+    def __exit__(
+        self, kind: type[BaseException] | None, error: BaseException | None, trace: TracebackType | None
+    ) -> None:
+        self.close()
+
+
+def _check_header(path: Path) -> None:
+    """Refuse a non-empty file that does not start with the SQLite header (before SQLite touches it)."""
+    if not path.exists() or path.stat().st_size == 0:
+        return
+    if path.is_dir():
+        raise StoreError(f"{path}: is a directory, not a run store file")
+    with path.open("rb") as file:
+        header = file.read(len(_SQLITE_HEADER))
+    if header != _SQLITE_HEADER:
+        raise StoreError(
+            f"{path}: not a catenary-env run store (not an SQLite database: the file is corrupt or something "
+            "else); refusing to touch it: give another --store path"
+        )

@@ -1,0 +1,129 @@
+"""A run killed with SIGKILL in the middle resumes to the result of an uninterrupted run; the command line."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from optimizers import EvaluationRecord, optimize
+from optimizers.cli import add_arguments, add_parser, run
+
+REPO = Path(__file__).resolve().parents[1]
+PROBLEM = "synthetic-quadratic-slow"  # 5 ms an evaluation: a run lasts long enough to be killed
+BUDGET = 300
+
+
+def _count(store: Path) -> int:
+    if not store.exists():
+        return 0
+    try:
+        with sqlite3.connect(f"file:{store}?mode=ro", uri=True, timeout=5.0) as connection:
+            return int(connection.execute("SELECT count(*) FROM evaluations").fetchone()[0])
+    except sqlite3.OperationalError:  # the schema is not created yet
+        return 0
+
+
+def _command(store: Path, optimizer: str) -> list[str]:
+    return [
+        sys.executable, "-m", "optimizers", PROBLEM, "--optimizer", optimizer, "--budget", str(BUDGET),
+        "--seed", "3", "--fidelity", "test", "--store", str(store), "--workers", "1", "--quiet", "--json",
+        "--resume",
+    ]  # fmt: skip
+
+
+def _comparable(records):
+    return [dataclasses.replace(record, wall_time=0.0) for record in records]
+
+
+@pytest.mark.parametrize(
+    "optimizer", ["ga"]
+)  # nevergrad's resume is tested in-process (its import takes 6 s)
+def test_killed_run_resumes_to_the_uninterrupted_result(tmp_path, optimizer):
+    store = tmp_path / "runs.sqlite"
+    process = subprocess.Popen(
+        _command(store, optimizer), cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE
+    )
+    deadline = time.monotonic() + 60.0
+    while _count(store) < 60 and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    process.send_signal(signal.SIGKILL)
+    process.communicate()
+    assert process.returncode == -signal.SIGKILL, "the run ended before it could be killed"
+    stored_at_kill = _count(store)
+    assert stored_at_kill >= 60
+
+    resumed = subprocess.run(
+        _command(store, optimizer), cwd=REPO, capture_output=True, text=True, timeout=120
+    )
+    assert resumed.returncode == 0, resumed.stderr
+    result = json.loads(resumed.stdout)
+    history = [EvaluationRecord(**{**entry, "x": tuple(entry["x"])}) for entry in result["history"]]
+
+    uninterrupted = optimize(PROBLEM, optimizer, budget=BUDGET, seed=3, fidelity="test")
+    assert len(history) > stored_at_kill
+    assert _comparable(history) == _comparable(uninterrupted.history)
+    assert result["best_sigma"] == uninterrupted.best_sigma
+    assert tuple(result["best_x"]) == uninterrupted.best_x
+    assert result["stop_reason"] == uninterrupted.stop_reason
+    assert _count(store) == len(history)  # one run in the store, each evaluation once
+
+
+# -- the command line -------------------------------------------------------------------------------------
+
+
+def _parse(argv: list[str]) -> argparse.Namespace:
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    return parser.parse_args(argv)
+
+
+def test_cli_runs_and_prints_json(tmp_path, capsys):
+    store = tmp_path / "runs.sqlite"
+    argv = ["synthetic-quadratic", "--optimizer", "de", "--budget", "20", "--seed", "1",
+            "--store", str(store), "--workers", "1", "--json", "--quiet"]  # fmt: skip
+    assert run(_parse(argv)) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["n_simulations"] == 20 and result["optimizer"] == "de" and len(result["history"]) >= 20
+    assert run(_parse(argv[:-2] + ["--quiet"])) == 0
+    assert "best sigma" in capsys.readouterr().out
+
+
+def test_cli_refuses_a_corrupt_store(tmp_path, capsys):
+    store = tmp_path / "runs.sqlite"
+    store.write_bytes(b"\x89PNG not a database at all" * 100)
+    assert run(_parse(["synthetic-quadratic", "--budget", "5", "--store", str(store), "--workers", "1"])) == 2
+    assert "not an SQLite database" in capsys.readouterr().err
+
+
+def test_cli_reports_unknown_problem(capsys):
+    assert run(_parse(["no-such-problem", "--budget", "5", "--store", ":memory:", "--workers", "1"])) == 2
+    assert "no-such-problem" in capsys.readouterr().err
+
+
+def test_cli_help_explains_every_option_with_units():
+    parser = argparse.ArgumentParser(prog="catenary")
+    sub = parser.add_subparsers(dest="command")
+    optimize_parser = add_parser(sub)
+    text = optimize_parser.format_help()
+    options = ("--optimizer", "--budget", "--seed", "--speed", "--fidelity", "--store", "--resume",
+               "--workers", "--scheduler", "--json")  # fmt: skip
+    for option in options:
+        assert option in text
+    assert "km/h" in text and "simulations" in text
+    for action in optimize_parser._actions:
+        assert action.help, f"{action.option_strings or action.dest} has no help"
+
+
+def test_module_entry_point_help():
+    completed = subprocess.run([sys.executable, "-m", "optimizers", "--help"], cwd=REPO, capture_output=True,
+                               text=True, timeout=60)  # fmt: skip
+    assert completed.returncode == 0 and "--budget" in completed.stdout

@@ -1,0 +1,139 @@
+"""The PPO design policy on a tiny synthetic one-step design env with the catenary envs' contract."""
+
+from __future__ import annotations
+
+import dataclasses
+import sqlite3
+from typing import Any
+
+import numpy as np
+import pytest
+
+gymnasium = pytest.importorskip("gymnasium")
+pytest.importorskip("stable_baselines3")
+
+from optimizers.problem import GridSpace  # noqa: E402
+from optimizers.rl import EnvSpec, PPOOptions, design_for_speed, train_design_policy  # noqa: E402
+from optimizers.synthetic import QuadraticProblem  # noqa: E402
+
+ENV_ID = "TestSpeedQuadraticDesign-v0"
+
+PROBLEM = QuadraticProblem(
+    name="test-speed-quadratic",
+    variable_names=("dh_1", "dh_2"),
+    lower=np.full(2, -0.02),
+    upper=np.full(2, 0.02),
+    step=np.full(2, 0.001),
+    centre=np.zeros(2),
+    weights=np.ones(2),
+    scale=0.01,
+    base_sigma=20.0,
+    constraint=np.array([1.0, 0.0]),
+    limit=0.015,
+)
+SPACE = GridSpace.from_problem(PROBLEM)
+PENALTY = 100.0
+
+
+class SpeedQuadraticDesignEnv(gymnasium.Env):
+    """One step per episode: the action is the design; σ is a quadratic whose minimiser moves with the speed.
+
+    Observation: the speed / 500 km/h. Reward: −σ (N), or −100 for an infeasible design (dh_1 > 0.015 m).
+    """
+
+    def __init__(self, speed_kmh: float = 300.0, speed_range: tuple[float, float] | None = None,
+                 fidelity: str = "test") -> None:  # fmt: skip
+        self.speed_kmh = float(speed_kmh if speed_kmh is not None else 300.0)
+        self.speed_range = speed_range
+        self.action_space = gymnasium.spaces.Box(-1.0, 1.0, (2,), np.float32)
+        self.observation_space = gymnasium.spaces.Box(0.0, 1.0, (1,), np.float32)
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        super().reset(seed=seed)
+        if options and "speed_kmh" in options:
+            self.speed_kmh = float(options["speed_kmh"])
+        elif self.speed_range is not None:
+            self.speed_kmh = float(self.np_random.uniform(*self.speed_range))
+        return self._observation(), {"speed_kmh": self.speed_kmh}
+
+    def step(self, action):
+        x = SPACE.action_to_design(action)
+        centre = np.array([0.01, -0.01]) * (self.speed_kmh - 250.0) / 50.0
+        sigma = 20.0 + float(np.sum(((x - centre) / 0.01) ** 2))
+        feasible = bool(PROBLEM.feasible(x))
+        info = {
+            "feasible": feasible,
+            "reason": "" if feasible else "dh_1 > 0.015 m",
+            "speed_kmh": self.speed_kmh,
+            "objective": sigma if feasible else PENALTY,
+            "wall_time": 0.0,
+        }
+        reward = -sigma if feasible else -PENALTY
+        return self._observation(), reward, True, False, info
+
+    def _observation(self):
+        return np.array([self.speed_kmh / 500.0], dtype=np.float32)
+
+
+if ENV_ID not in gymnasium.registry:
+    gymnasium.register(id=ENV_ID, entry_point=SpeedQuadraticDesignEnv)
+
+SINGLE_SPEED = EnvSpec(ENV_ID, speed_kmh=300.0, fidelity="test")
+SPEED_RANGE = EnvSpec(ENV_ID, speed_kmh=None, speed_range=(200.0, 300.0), fidelity="test")
+SMALL = PPOOptions(n_steps=64, batch_size=64, n_epochs=4, net_arch=(32, 32))
+
+
+def _comparable(history):
+    return [dataclasses.replace(record, wall_time=0.0) for record in history]
+
+
+@pytest.mark.parametrize("budget", [256, 100])
+def test_ppo_spends_exactly_the_budget_and_is_reproducible(budget):
+    _, first = train_design_policy(SINGLE_SPEED, PROBLEM, budget=budget, seed=1, options=SMALL)
+    _, second = train_design_policy(SINGLE_SPEED, PROBLEM, budget=budget, seed=1, options=SMALL)
+    assert len(first.history) == first.n_simulations == budget
+    assert all(record.charged and not record.cached for record in first.history)
+    assert _comparable(first.history) == _comparable(second.history)
+    for record in first.history:
+        assert np.array_equal(SPACE.snap(record.x), np.array(record.x))
+        assert record.speed_kmh == 300.0
+    assert first.best_sigma == min(r.sigma for r in first.history if r.feasible)
+
+
+def test_ppo_resumes_an_interrupted_training(tmp_path):
+    store = tmp_path / "runs.sqlite"
+    policy, full = train_design_policy(SPEED_RANGE, PROBLEM, budget=192, seed=2, options=SMALL, store=store)
+    with sqlite3.connect(store) as connection:  # as if killed after 100 steps
+        connection.execute("DELETE FROM evaluations WHERE idx >= 100")
+    resumed_policy, resumed = train_design_policy(
+        SPEED_RANGE, PROBLEM, budget=192, seed=2, options=SMALL, store=store, resume=True
+    )
+    assert resumed.run_id == full.run_id
+    assert _comparable(resumed.history) == _comparable(full.history)
+    for speed in (210.0, 290.0):
+        assert np.array_equal(
+            design_for_speed(policy, PROBLEM, speed), design_for_speed(resumed_policy, PROBLEM, speed)
+        )
+
+
+def test_speed_conditioned_policy_learns_the_design_per_speed():
+    options = PPOOptions(n_steps=256, batch_size=64, n_epochs=10, learning_rate=1e-3, net_arch=(32, 32))
+    policy, result = train_design_policy(SPEED_RANGE, PROBLEM, budget=2048, seed=0, options=options)
+    assert result.speed_kmh is None
+    speeds = {record.speed_kmh for record in result.history}
+    assert len(speeds) > 1000 and min(speeds) >= 200.0 and max(speeds) <= 300.0  # one speed per episode
+    early = np.mean([r.sigma if r.feasible else PENALTY for r in result.history[:256]])
+    late = np.mean([r.sigma if r.feasible else PENALTY for r in result.history[-256:]])
+    assert late < 0.75 * early
+    designs = {speed: design_for_speed(policy, PROBLEM, speed) for speed in (200.0, 250.0, 300.0)}
+    for speed, x in designs.items():
+        assert np.array_equal(SPACE.snap(x), x)
+        assert np.array_equal(x, design_for_speed(policy, PROBLEM, speed))  # deterministic
+    # The minimiser moves from (-0.01, 0.01) m at 200 km/h to (0.01, -0.01) m at 300 km/h: so does the policy.
+    assert designs[200.0][0] < designs[250.0][0] < designs[300.0][0]
+    assert designs[200.0][1] > designs[250.0][1] > designs[300.0][1]
+
+
+def test_env_spec_refuses_nothing_silently():
+    with pytest.raises(ValueError, match="budget"):
+        train_design_policy(SINGLE_SPEED, PROBLEM, budget=0, seed=0)
