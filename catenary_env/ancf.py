@@ -29,7 +29,9 @@ GAUSS_W = 0.5 * _GW
 # Derivative coefficients of the four nodal vectors (r_i, r'_i, r_j, r'_j), split as A0 / L**pa
 # for d r / ds and B0 / L**pb for d² r / ds².
 _XI = GAUSS_XI[:, None]
-_A0 = np.hstack([-6 * _XI + 6 * _XI**2, 1 - 4 * _XI + 3 * _XI**2, 6 * _XI - 6 * _XI**2, -2 * _XI + 3 * _XI**2])
+_A0 = np.hstack(
+    [-6 * _XI + 6 * _XI**2, 1 - 4 * _XI + 3 * _XI**2, 6 * _XI - 6 * _XI**2, -2 * _XI + 3 * _XI**2]
+)
 _PA = np.array([1.0, 0.0, 1.0, 0.0])
 _B0 = np.hstack([-6 + 12 * _XI, -4 + 6 * _XI, 6 - 12 * _XI, -2 + 6 * _XI])
 _PB = np.array([2.0, 1.0, 2.0, 1.0])
@@ -59,7 +61,12 @@ def hermite(xi: np.ndarray, length: np.ndarray) -> np.ndarray:
     xi = np.asarray(xi, dtype=float)
     length = np.asarray(length, dtype=float)
     return np.stack(
-        [1 - 3 * xi**2 + 2 * xi**3, length * (xi - 2 * xi**2 + xi**3), 3 * xi**2 - 2 * xi**3, length * (-(xi**2) + xi**3)],
+        [
+            1 - 3 * xi**2 + 2 * xi**3,
+            length * (xi - 2 * xi**2 + xi**3),
+            3 * xi**2 - 2 * xi**3,
+            length * (-(xi**2) + xi**3),
+        ],
         axis=-1,
     )
 
@@ -69,7 +76,12 @@ def hermite_dxi(xi: np.ndarray, length: np.ndarray) -> np.ndarray:
     xi = np.asarray(xi, dtype=float)
     length = np.asarray(length, dtype=float)
     return np.stack(
-        [-6 * xi + 6 * xi**2, length * (1 - 4 * xi + 3 * xi**2), 6 * xi - 6 * xi**2, length * (-2 * xi + 3 * xi**2)],
+        [
+            -6 * xi + 6 * xi**2,
+            length * (1 - 4 * xi + 3 * xi**2),
+            6 * xi - 6 * xi**2,
+            length * (-2 * xi + 3 * xi**2),
+        ],
         axis=-1,
     )
 
@@ -135,7 +147,9 @@ def cable_state(
         tt = t[..., :, None] * t[..., None, :]
         d_ax = ea[..., None, None] * (tt + (eps / nrm)[..., None, None] * (np.eye(2) - tt))
         d_ax_rsL = np.einsum("egcd,egd->egc", d_ax, rsL)
-        dphi_ax = (ea * eps)[..., None, None] * aL[..., None] * t[:, :, None, :] + a[..., None] * d_ax_rsL[:, :, None, :]
+        dphi_ax = (ea * eps)[..., None, None] * aL[..., None] * t[:, :, None, :] + a[..., None] * d_ax_rsL[
+            :, :, None, :
+        ]
         kappaL = np.einsum("egd,egd->eg", rsL, p) + np.einsum("egd,egd->eg", s, rssL)
         pL = rssL @ _J.T
         sL = rsL @ _J
@@ -197,5 +211,5 @@ def mass_matrix(length: np.ndarray, linear_mass: np.ndarray) -> np.ndarray:
     L = length[:, None, None]
     base = np.array([[156, 22, 54, -13], [22, 4, 13, -3], [54, 13, 156, -22], [-13, -3, -22, 4]], dtype=float)
     powers = np.array([[0, 1, 0, 1], [1, 2, 1, 2], [0, 1, 0, 1], [1, 2, 1, 2]])
-    m4 = (linear_mass[:, None, None] * L / 420.0) * base[None] * L**powers[None]
+    m4 = (linear_mass[:, None, None] * L / 420.0) * base[None] * L ** powers[None]
     return np.kron(m4, np.eye(2)[None])

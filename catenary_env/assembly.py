@@ -77,7 +77,9 @@ def assemble(
     cdofs = layout.cable_dofs()
     bdofs = layout.bar_dofs()
     Lc, Lb = lengths[:n_c], lengths[n_c:]
-    cs = cable_state(X[cdofs], Lc, layout.cable_axial_stiffness, layout.cable_bending_stiffness, tangent, dlength)
+    cs = cable_state(
+        X[cdofs], Lc, layout.cable_axial_stiffness, layout.cable_bending_stiffness, tangent, dlength
+    )
     bs = bar_state(X[bdofs], Lb, layout.bar_stiffness, layout.bar_axial_stiffness)
     g_c, dg_c = gravity_load(Lc, layout.cable_linear_mass * GRAVITY)
     bar_force, b_force, b_stiff, b_dlen = bs.axial_force, bs.force, bs.stiffness, bs.force_dlength

@@ -40,7 +40,9 @@ class BarState(NamedTuple):
     force_dlength: np.ndarray
 
 
-def spring_rate(reference_length: np.ndarray, stiffness: np.ndarray, axial_stiffness: np.ndarray) -> np.ndarray:
+def spring_rate(
+    reference_length: np.ndarray, stiffness: np.ndarray, axial_stiffness: np.ndarray
+) -> np.ndarray:
     """Spring rate k, N/m: ``stiffness`` where it is finite, else EA / L."""
     return np.where(np.isfinite(stiffness), stiffness, axial_stiffness / reference_length)
 

@@ -20,13 +20,19 @@ import shutil
 import sys
 import time
 from collections.abc import Callable, Sequence
-from pathlib import Path
 
 from .definition import CatenaryDefinition, DefinitionError
 from .design import Design, check_design, check_speed, level_design, presag_design
 from .presets import catenary_names, load_catenary, load_pantograph, pantograph_names, preset_path
-from .simulation import (FIDELITIES, Fidelity, calibrate_uplift, check_fidelity, en50367_mean_force, simulate,
-                         solve_static)
+from .simulation import (
+    FIDELITIES,
+    Fidelity,
+    calibrate_uplift,
+    check_fidelity,
+    en50367_mean_force,
+    simulate,
+    solve_static,
+)
 
 
 class Progress:
@@ -43,8 +49,10 @@ class Progress:
         width = 30
         filled = int(round(width * fraction))
         elapsed = time.perf_counter() - self.start
-        sys.stderr.write(f"\r{self.label} [{'#' * filled}{'.' * (width - filled)}] {100 * fraction:5.1f} % "
-                         f"{elapsed:6.1f} s {note}")
+        sys.stderr.write(
+            f"\r{self.label} [{'#' * filled}{'.' * (width - filled)}] {100 * fraction:5.1f} % "
+            f"{elapsed:6.1f} s {note}"
+        )
         if fraction >= 1.0:
             sys.stderr.write("\n")
         sys.stderr.flush()
@@ -52,23 +60,43 @@ class Progress:
 
 def _design_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("design (default: level contact wire on the preset's droppers)")
-    group.add_argument("--presag", type=float, metavar="S",
-                       help="parabolic pre-sag of the contact wire at mid-span, m (positive = lower)")
-    group.add_argument("--offsets", type=float, nargs="+", metavar="DH",
-                       help="contact-wire height change at every dropper of a span, m (negative = lower), "
-                            "symmetric about mid-span")
-    group.add_argument("--droppers", type=float, nargs="+", metavar="X",
-                       help="dropper positions in a span, m from its first support (default: the preset's)")
+    group.add_argument(
+        "--presag",
+        type=float,
+        metavar="S",
+        help="parabolic pre-sag of the contact wire at mid-span, m (positive = lower)",
+    )
+    group.add_argument(
+        "--offsets",
+        type=float,
+        nargs="+",
+        metavar="DH",
+        help="contact-wire height change at every dropper of a span, m (negative = lower), "
+        "symmetric about mid-span",
+    )
+    group.add_argument(
+        "--droppers",
+        type=float,
+        nargs="+",
+        metavar="X",
+        help="dropper positions in a span, m from its first support (default: the preset's)",
+    )
 
 
 def _fidelity_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("model size and resolution")
-    group.add_argument("--fidelity", choices=sorted(FIDELITIES), default=None,
-                       help="'study': 20 spans, 0.5 m contact-wire elements, 1 ms step; 'test': 5 spans, coarse "
-                            "(default: the preset's own number of spans with the study mesh)")
+    group.add_argument(
+        "--fidelity",
+        choices=sorted(FIDELITIES),
+        default=None,
+        help="'study': 20 spans, 0.5 m contact-wire elements, 1 ms step; 'test': 5 spans, coarse "
+        "(default: the preset's own number of spans with the study mesh)",
+    )
     group.add_argument("--spans", type=int, metavar="N", help="number of spans in the section (overrides)")
     group.add_argument("--analysis-spans", type=int, metavar="N", help="central spans analysed (overrides)")
-    group.add_argument("--element", type=float, metavar="M", help="largest contact-wire element, m (overrides)")
+    group.add_argument(
+        "--element", type=float, metavar="M", help="largest contact-wire element, m (overrides)"
+    )
     group.add_argument("--time-step", type=float, metavar="S", help="Newmark time step, s (overrides)")
 
 
@@ -117,8 +145,10 @@ def cmd_static(args: argparse.Namespace) -> int:
     central = lay.dropper_span == lay.n_spans // 2
     result = {
         "preset": catenary.name,
-        "design": {"dropper_positions": list(design.dropper_positions),
-                   "contact_wire_offsets": list(design.contact_wire_offsets)},
+        "design": {
+            "dropper_positions": list(design.dropper_positions),
+            "contact_wire_offsets": list(design.contact_wire_offsets),
+        },
         "n_spans": lay.n_spans,
         "feasible": not static.infeasibility(),
         "reason": static.infeasibility(),
@@ -134,22 +164,38 @@ def cmd_static(args: argparse.Namespace) -> int:
         for i, force in enumerate((100.0, 200.0)):
             profiles.append(stiffness_profile(static, force, args.points))
             progress((i + 1) / 2)
-        result["stiffness"] = {f"{p.force:.0f}N": {"positions": p.positions.tolist(), "stiffness": p.stiffness.tolist(),
-                                                   "alpha": p.variability} for p in profiles}
+        result["stiffness"] = {
+            f"{p.force:.0f}N": {
+                "positions": p.positions.tolist(),
+                "stiffness": p.stiffness.tolist(),
+                "alpha": p.variability,
+            }
+            for p in profiles
+        }
     if args.json:
         print(json.dumps(result, indent=2))
     else:
-        print(f"{catenary.name}: {lay.n_spans} spans, shape found in {elapsed:.2f} s "
-              f"({result['newton_iterations']} Newton iterations, residual {result['residual']:.1e} N)")
+        print(
+            f"{catenary.name}: {lay.n_spans} spans, shape found in {elapsed:.2f} s "
+            f"({result['newton_iterations']} Newton iterations, residual {result['residual']:.1e} N)"
+        )
         print("feasible" if result["feasible"] else f"INFEASIBLE: {result['reason']}")
         print(f"{'dropper':>8} {'x (m)':>8} {'Δh (mm)':>8} {'length (m)':>11} {'force (N)':>10}")
-        for i, (x, dh, length, force) in enumerate(zip(design.dropper_positions, design.contact_wire_offsets,
-                                                       result["dropper_lengths"], result["dropper_forces"],
-                                                       strict=True)):
+        for i, (x, dh, length, force) in enumerate(
+            zip(
+                design.dropper_positions,
+                design.contact_wire_offsets,
+                result["dropper_lengths"],
+                result["dropper_forces"],
+                strict=True,
+            )
+        ):
             print(f"{i + 1:>8} {x:>8.2f} {1e3 * dh:>8.1f} {length:>11.4f} {force:>10.2f}")
         for p in profiles:
-            print(f"stiffness at {p.force:.0f} N: {p.stiffness.min():.0f} to {p.stiffness.max():.0f} N/m, "
-                  f"α = {p.variability:.3f}")
+            print(
+                f"stiffness at {p.force:.0f} N: {p.stiffness.min():.0f} to {p.stiffness.max():.0f} N/m, "
+                f"α = {p.variability:.3f}"
+            )
     if args.plot:
         from . import plots
 
@@ -176,24 +222,41 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     uplift = args.uplift
     if uplift is None and pantograph.uplift_force is None:
         target = args.target_mean if args.target_mean is not None else en50367_mean_force(speed)
-        print(f"calibrating the uplift force for a mean contact force of {target:.1f} N on the level reference "
-              "design...", file=sys.stderr)
+        print(
+            f"calibrating the uplift force for a mean contact force of {target:.1f} N on the level reference "
+            "design...",
+            file=sys.stderr,
+        )
         uplift = calibrate_uplift(catenary, pantograph, level_design(catenary), speed, fidelity, target)
     progress = Progress("simulate", args.json)
     start = time.perf_counter()
     sim = simulate(catenary, pantograph, design, speed, fidelity, uplift, progress=progress)
     elapsed = time.perf_counter() - start
     stats = sim.statistics.as_dict()
-    result = {"preset": catenary.name, "pantograph": pantograph.name, "speed_kmh": args.speed,
-              "uplift_force": sim.uplift_force, "n_spans": fidelity.n_spans,
-              "analysis_window": list(sim.window), "statistics": stats,
-              "feasible": stats["contact_loss_percent"] == 0.0, "wall_time": elapsed}
+    result = {
+        "preset": catenary.name,
+        "pantograph": pantograph.name,
+        "speed_kmh": args.speed,
+        "uplift_force": sim.uplift_force,
+        "n_spans": fidelity.n_spans,
+        "analysis_window": list(sim.window),
+        "statistics": stats,
+        "feasible": stats["contact_loss_percent"] == 0.0,
+        "wall_time": elapsed,
+    }
     if args.json:
         print(json.dumps(result, indent=2))
     else:
-        print(f"{catenary.name} at {args.speed:g} km/h, uplift {sim.uplift_force:.2f} N, {fidelity.n_spans} spans, "
-              f"analysis {sim.window[0]:.0f}–{sim.window[1]:.0f} m, {elapsed:.2f} s")
-        units = {"max_support_uplift": ("mm", 1e3), "contact_loss_percent": ("%", 1.0), "std_over_mean": ("", 1.0)}
+        print(
+            f"{catenary.name} at {args.speed:g} km/h, uplift {sim.uplift_force:.2f} N, "
+            f"{fidelity.n_spans} spans, "
+            f"analysis {sim.window[0]:.0f}–{sim.window[1]:.0f} m, {elapsed:.2f} s"
+        )
+        units = {
+            "max_support_uplift": ("mm", 1e3),
+            "contact_loss_percent": ("%", 1.0),
+            "std_over_mean": ("", 1.0),
+        }
         for key, value in stats.items():
             unit, scale = units.get(key, ("N", 1.0))
             print(f"  {key:<22} {scale * value:10.3f} {unit}")
@@ -213,10 +276,27 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
     report = validate(tuple(args.speeds))
     if args.json:
-        print(json.dumps({"passed": report.passed, "uplift_force": report.uplift_force,
-                          "rows": [{"speed_kmh": r.speed_kmh, "quantity": r.quantity, "value": r.value,
-                                    "low": r.low, "high": r.high, "passed": r.passed, "margin": r.margin}
-                                   for r in report.rows]}, indent=2))
+        print(
+            json.dumps(
+                {
+                    "passed": report.passed,
+                    "uplift_force": report.uplift_force,
+                    "rows": [
+                        {
+                            "speed_kmh": r.speed_kmh,
+                            "quantity": r.quantity,
+                            "value": r.value,
+                            "low": r.low,
+                            "high": r.high,
+                            "passed": r.passed,
+                            "margin": r.margin,
+                        }
+                        for r in report.rows
+                    ],
+                },
+                indent=2,
+            )
+        )
     else:
         print(format_validation(report))
     return 0 if report.passed else 1
@@ -226,10 +306,16 @@ def format_validation(report) -> str:  # noqa: ANN001
     """The EN 50318:2002 table as Markdown."""
     lines = ["| speed (km/h) | quantity | value | accepted range | result |", "|---|---|---|---|---|"]
     for r in report.rows:
-        scale, unit = (1e3, "mm") if r.quantity == "max_support_uplift" else (1.0, "%" if "percent" in r.quantity else "N")
+        scale, unit = (
+            (1e3, "mm")
+            if r.quantity == "max_support_uplift"
+            else (1.0, "%" if "percent" in r.quantity else "N")
+        )
         verdict = "pass" if r.passed else f"FAIL (by {scale * r.margin:.2f} {unit})"
-        lines.append(f"| {r.speed_kmh:g} | {r.quantity} | {scale * r.value:.2f} {unit} | "
-                     f"{scale * r.low:g} – {scale * r.high:g} | {verdict} |")
+        lines.append(
+            f"| {r.speed_kmh:g} | {r.quantity} | {scale * r.value:.2f} {unit} | "
+            f"{scale * r.low:g} – {scale * r.high:g} | {verdict} |"
+        )
     return "\n".join(lines)
 
 
@@ -270,8 +356,11 @@ def _optional_commands(sub: argparse._SubParsersAction) -> dict[str, Callable[[a
 
 
 def build_parser() -> tuple[argparse.ArgumentParser, dict[str, Callable[[argparse.Namespace], int]]]:
-    parser = argparse.ArgumentParser(prog="catenary", description=__doc__.split("\n\n")[0],
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        prog="catenary",
+        description=__doc__.split("\n\n")[0],
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     sub = parser.add_subparsers(dest="command", required=True)
     handlers: dict[str, Callable[[argparse.Namespace], int]] = {}
 
@@ -279,20 +368,33 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, Callable[[argpars
     p.add_argument("preset", help=f"catenary preset ({', '.join(catenary_names())}) or a .toml file")
     _design_arguments(p)
     _fidelity_arguments(p)
-    p.add_argument("--stiffness", action="store_true", help="also compute the stiffness profile at 100 N and 200 N")
-    p.add_argument("--points", type=int, default=23, help="load points along the span for the stiffness (default 23)")
+    p.add_argument(
+        "--stiffness", action="store_true", help="also compute the stiffness profile at 100 N and 200 N"
+    )
+    p.add_argument(
+        "--points", type=int, default=23, help="load points along the span for the stiffness (default 23)"
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object (for scripts)")
-    p.add_argument("--plot", metavar="FILE", help="save the span geometry, heights, stiffness and dropper forces (PNG/SVG)")
+    p.add_argument(
+        "--plot",
+        metavar="FILE",
+        help="save the span geometry, heights, stiffness and dropper forces (PNG/SVG)",
+    )
     handlers["static"] = cmd_static
 
     p = sub.add_parser("simulate", help="pantograph passage: contact-force statistics (SPEC 3.7)")
     p.add_argument("preset", help=f"catenary preset ({', '.join(catenary_names())}) or a .toml file")
     p.add_argument("--speed", type=float, required=True, help="train speed, km/h")
     p.add_argument("--pantograph", help="pantograph preset or .toml file (default: the catenary's)")
-    p.add_argument("--uplift", type=float, help="static uplift force, N (default: the pantograph's, or calibrated)")
-    p.add_argument("--target-mean", type=float,
-                   help="calibrate the uplift so the reference design's mean contact force is this, N "
-                        "(default: EN 50367, 0.00097 v² + 70 with v in km/h)")
+    p.add_argument(
+        "--uplift", type=float, help="static uplift force, N (default: the pantograph's, or calibrated)"
+    )
+    p.add_argument(
+        "--target-mean",
+        type=float,
+        help="calibrate the uplift so the reference design's mean contact force is this, N "
+        "(default: EN 50367, 0.00097 v² + 70 with v in km/h)",
+    )
     _design_arguments(p)
     _fidelity_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object (for scripts)")
@@ -300,7 +402,9 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, Callable[[argpars
     handlers["simulate"] = cmd_simulate
 
     p = sub.add_parser("validate", help="EN 50318:2002 validation table (value, accepted range, pass/fail)")
-    p.add_argument("--speeds", type=float, nargs="+", default=[250.0, 300.0], help="speeds, km/h (250 and 300)")
+    p.add_argument(
+        "--speeds", type=float, nargs="+", default=[250.0, 300.0], help="speeds, km/h (250 and 300)"
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object (for scripts)")
     handlers["validate"] = cmd_validate
 
@@ -327,4 +431,3 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 if __name__ == "__main__":
     sys.exit(main())
-

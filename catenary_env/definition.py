@@ -298,11 +298,15 @@ def check_dropper_positions(positions: tuple[float, ...], span_length: float, wh
         raise DefinitionError(f"{where}: dropper positions must be symmetric about mid-span")
 
 
-def check_stitch_reach(positions: tuple[float, ...], stitch_length: float, span_length: float, where: str) -> None:
+def check_stitch_reach(
+    positions: tuple[float, ...], stitch_length: float, span_length: float, where: str
+) -> None:
     """Check that the first dropper on each side of a support, and only it, hangs from the stitch wire."""
     half = 0.5 * stitch_length
     if not (half < 0.5 * span_length):
-        raise DefinitionError(f"{where}.stitch_wire.length = {stitch_length!r}: must be below the span length")
+        raise DefinitionError(
+            f"{where}.stitch_wire.length = {stitch_length!r}: must be below the span length"
+        )
     if not (positions[0] < half) or (len(positions) > 1 and positions[1] <= half):
         raise DefinitionError(
             f"{where}.dropper_positions: the first dropper must lie within the stitch wire's half-length "

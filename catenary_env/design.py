@@ -60,8 +60,9 @@ def presag_design(
     return Design(positions, tuple(-4.0 * presag * x * (length - x) / length**2 for x in positions))
 
 
-def symmetric_design(half_positions: tuple[float, ...], half_offsets: tuple[float, ...], span_length: float,
-                     mid_dropper: bool) -> Design:
+def symmetric_design(
+    half_positions: tuple[float, ...], half_offsets: tuple[float, ...], span_length: float, mid_dropper: bool
+) -> Design:
     """Build a symmetric design from the droppers of the first half span (support side first).
 
     Parameters
@@ -77,7 +78,9 @@ def symmetric_design(half_positions: tuple[float, ...], half_offsets: tuple[floa
     """
     n_half = len(half_positions)
     if len(half_offsets) != n_half + int(mid_dropper):
-        raise DesignError(f"half_offsets: expected {n_half + int(mid_dropper)} values, got {len(half_offsets)}")
+        raise DesignError(
+            f"half_offsets: expected {n_half + int(mid_dropper)} values, got {len(half_offsets)}"
+        )
     positions = list(half_positions) + ([0.5 * span_length] if mid_dropper else [])
     positions += [span_length - x for x in reversed(half_positions)]
     offsets = list(half_offsets) + list(reversed(half_offsets[:n_half]))
@@ -110,7 +113,9 @@ def check_design(catenary: CatenaryDefinition, design: Design) -> None:
     try:
         check_dropper_positions(design.dropper_positions, catenary.span_length, where)
         if catenary.stitch_wire is not None:
-            check_stitch_reach(design.dropper_positions, catenary.stitch_wire.length, catenary.span_length, "design")
+            check_stitch_reach(
+                design.dropper_positions, catenary.stitch_wire.length, catenary.span_length, "design"
+            )
     except DesignError:
         raise
     except DefinitionError as error:
@@ -133,7 +138,8 @@ def check_design(catenary: CatenaryDefinition, design: Design) -> None:
         if r < minimum:
             limit = catenary.contact_wire_height + float(room[i] + offsets[i]) - minimum
             raise DesignError(
-                f"design.contact_wire_offsets[{i}] = {offsets[i]!r}: the dropper at {x[i]} m would be shorter "
+                f"design.contact_wire_offsets[{i}] = {offsets[i]!r}: the dropper at {x[i]} m would be "
+                f"shorter "
                 f"than {minimum} m (negative length); the contact-wire height there must stay below "
                 f"{limit:.3f} m"
             )

@@ -154,7 +154,9 @@ def build_layout(
     # an interior support.
     on_stitch = np.zeros(dropper_x.size, dtype=bool)
     if stitch is not None:
-        on_stitch = ((dropper_index == 0) & (dropper_span > 0)) | ((dropper_index == n_d - 1) & (dropper_span < n_spans - 1))
+        on_stitch = ((dropper_index == 0) & (dropper_span > 0)) | (
+            (dropper_index == n_d - 1) & (dropper_span < n_spans - 1)
+        )
 
     cw_points = _subdivide(list(support_x) + list(dropper_x), contact_wire_element)
     mw_keys = list(support_x) + list(dropper_x[~on_stitch])
@@ -164,8 +166,11 @@ def build_layout(
     st_points = sorted(round(x, 9) for x in dropper_x[on_stitch])
 
     # Number nodes in order of x (CW before stitch before MW at the same x) for a banded matrix.
-    entries = sorted([(x, CONTACT) for x in cw_points] + [(x, MESSENGER) for x in mw_points]
-                     + [(x, STITCH) for x in st_points])
+    entries = sorted(
+        [(x, CONTACT) for x in cw_points]
+        + [(x, MESSENGER) for x in mw_points]
+        + [(x, STITCH) for x in st_points]
+    )
     node_x = np.array([e[0] for e in entries])
     node_kind = np.array([e[1] for e in entries])
     sizes = np.where(node_kind == STITCH, 2, 4)
@@ -199,8 +204,12 @@ def build_layout(
     stitch_bars = []
     if stitch is not None:
         for xs in support_x[1:-1]:
-            chain = [node(MESSENGER, xs - half), node(STITCH, xs - L + d[-1]), node(STITCH, xs + d[0]),
-                     node(MESSENGER, xs + half)]
+            chain = [
+                node(MESSENGER, xs - half),
+                node(STITCH, xs - L + d[-1]),
+                node(STITCH, xs + d[0]),
+                node(MESSENGER, xs + half),
+            ]
             stitch_bars.append([len(bar_nodes) + i for i in range(3)])
             for a, b in zip(chain[:-1], chain[1:], strict=True):
                 bar_nodes.append((a, b))

@@ -62,7 +62,9 @@ class ContactWireGeometry:
         L = self.length[e]
         xi = (x - qx[:, 0]) / (qx[:, 2] - qx[:, 0])
         for _ in range(8):  # Newton on x(ξ) = x; the map is nearly linear
-            xi -= (np.einsum("nk,nk->n", hermite(xi, L), qx) - x) / np.einsum("nk,nk->n", hermite_dxi(xi, L), qx)
+            xi -= (np.einsum("nk,nk->n", hermite(xi, L), qx) - x) / np.einsum(
+                "nk,nk->n", hermite_dxi(xi, L), qx
+            )
         h = hermite(xi, L)
         height = np.einsum("nk,nk->n", h, self.q[e][:, [1, 3, 5, 7]])
         return e, h, height
@@ -126,8 +128,11 @@ def linearise(static: StaticSolution) -> LinearSystem:
     bdofs = lay.bar_dofs()[drop]
     bs = bar_state(X[bdofs], lengths[n_c + drop], lay.bar_stiffness[drop], lay.bar_axial_stiffness[drop])
     n = bs.direction
-    rate = np.where(np.isfinite(lay.bar_stiffness[drop]), lay.bar_stiffness[drop],
-                    lay.bar_axial_stiffness[drop] / lengths[n_c + drop])
+    rate = np.where(
+        np.isfinite(lay.bar_stiffness[drop]),
+        lay.bar_stiffness[drop],
+        lay.bar_axial_stiffness[drop] / lengths[n_c + drop],
+    )
     b_row = np.hstack([-n, n])  # Δl = b_row · (u_a, u_b)
     axial = rate[:, None, None] * b_row[:, :, None] * b_row[:, None, :]
     K = K - scatter_matrix(bdofs, bs.stiffness, n_all) + scatter_matrix(bdofs, axial, n_all)

@@ -39,7 +39,9 @@ class NewmarkConstants:
             a5=0.5 * dt * (gamma / beta - 2.0),
         )
 
-    def update(self, u0: np.ndarray, v0: np.ndarray, acc0: np.ndarray, u1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def update(
+        self, u0: np.ndarray, v0: np.ndarray, acc0: np.ndarray, u1: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Velocity and acceleration at the end of the step."""
         acc1 = self.a0 * (u1 - u0) - self.a2 * v0 - self.a3 * acc0
         v1 = self.a1 * (u1 - u0) - self.a4 * v0 - self.a5 * acc0
@@ -87,7 +89,9 @@ class Trajectory:
     unresolved_steps: int
 
 
-def passage_positions(section_length: float, speed: float, dt: float, start: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+def passage_positions(
+    section_length: float, speed: float, dt: float, start: float = 0.0
+) -> tuple[np.ndarray, np.ndarray]:
     """Times (s) and pantograph positions (m) of a passage from ``start`` to the section's end."""
     n = int(np.floor((section_length - start) / (speed * dt) + 1e-9)) + 1
     time = np.arange(n) * dt

@@ -99,7 +99,9 @@ def simulate_passage_reference(
             new_contact, new_slack = bool(gap > 0.0), elastic < 0.0
             if new_contact == contact and np.array_equal(new_slack, slack):
                 break
-            contact, slack = switch_states(contact, slack, new_contact, new_slack, kh * gap, elastic, iteration)
+            contact, slack = switch_states(
+                contact, slack, new_contact, new_slack, kh * gap, elastic, iteration
+            )
         else:
             unresolved += 1
         V, A = nm.update(U, V, A, U_new)
@@ -112,5 +114,16 @@ def simulate_passage_reference(
         np.minimum(d_min, dropper, out=d_min)
         np.maximum(d_max, dropper, out=d_max)
         slack_steps += bool(np.any(slack))
-    return Trajectory(time, position, force, head_h, uplift, lay.support_x.copy(), supports, d_min, d_max,
-                      slack_steps, unresolved)
+    return Trajectory(
+        time,
+        position,
+        force,
+        head_h,
+        uplift,
+        lay.support_x.copy(),
+        supports,
+        d_min,
+        d_max,
+        slack_steps,
+        unresolved,
+    )

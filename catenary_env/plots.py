@@ -38,8 +38,11 @@ def span_geometry(static: StaticSolution, ax: Any, span: int | None = None) -> A
     x0 = span * lay.span_length
     X = static.positions
     inside = (lay.node_x >= x0 - 1e-9) & (lay.node_x <= x0 + lay.span_length + 1e-9)
-    for kind, label, style in ((CONTACT, "contact wire", "C0-"), (MESSENGER, "messenger wire", "C1-"),
-                               (STITCH, "stitch wire", "C2o-")):
+    for kind, label, style in (
+        (CONTACT, "contact wire", "C0-"),
+        (MESSENGER, "messenger wire", "C1-"),
+        (STITCH, "stitch wire", "C2o-"),
+    ):
         nodes = np.flatnonzero(inside & (lay.node_kind == kind))
         if nodes.size:
             ax.plot(lay.node_x[nodes] - x0, X[lay.node_dof[nodes] + 1], style, lw=1.2, ms=3, label=label)
@@ -59,8 +62,9 @@ def contact_wire_height(static: StaticSolution, ax: Any, span: int | None = None
     lay = static.layout
     span = lay.n_spans // 2 if span is None else span
     x0 = span * lay.span_length
-    nodes = np.flatnonzero((lay.node_kind == CONTACT) & (lay.node_x >= x0 - 1e-9)
-                           & (lay.node_x <= x0 + lay.span_length + 1e-9))
+    nodes = np.flatnonzero(
+        (lay.node_kind == CONTACT) & (lay.node_x >= x0 - 1e-9) & (lay.node_x <= x0 + lay.span_length + 1e-9)
+    )
     base = lay.catenary.contact_wire_height
     ax.plot(lay.node_x[nodes] - x0, 1e3 * (static.positions[lay.node_dof[nodes] + 1] - base), "C0-")
     drop = lay.bar_nodes[lay.dropper_bars[lay.dropper_span == span], 1]
@@ -90,7 +94,9 @@ def contact_force(simulation: Simulation, ax: Any) -> Any:
 def stiffness(profiles: list[StiffnessProfile], ax: Any) -> Any:
     """Static stiffness along the span for one or more load levels."""
     for p in profiles:
-        ax.plot(p.positions, p.stiffness / 1e3, "o-", ms=3, label=f"F = {p.force:.0f} N, α = {p.variability:.3f}")
+        ax.plot(
+            p.positions, p.stiffness / 1e3, "o-", ms=3, label=f"F = {p.force:.0f} N, α = {p.variability:.3f}"
+        )
     ax.set_xlabel("position in span (m)")
     ax.set_ylabel("stiffness (kN/m)")
     ax.legend(fontsize=8)

@@ -84,12 +84,16 @@ class StaticSolution:
         lay = self.layout
         if np.min(lengths) <= 0.0:
             i = int(np.argmin(lengths))
-            return (f"static: dropper {lay.dropper_index[i] + 1} of span {lay.dropper_span[i] + 1} needs a "
-                    f"negative length ({lengths[i]:.4f} m)")
+            return (
+                f"static: dropper {lay.dropper_index[i] + 1} of span {lay.dropper_span[i] + 1} needs a "
+                f"negative length ({lengths[i]:.4f} m)"
+            )
         if np.min(forces) < 0.0:
             i = int(np.argmin(forces))
-            return (f"static: dropper {lay.dropper_index[i] + 1} of span {lay.dropper_span[i] + 1} is in "
-                    f"compression ({forces[i]:.2f} N)")
+            return (
+                f"static: dropper {lay.dropper_index[i] + 1} of span {lay.dropper_span[i] + 1} is in "
+                f"compression ({forces[i]:.2f} N)"
+            )
         return ""
 
 
@@ -112,8 +116,10 @@ def _system(layout: Layout) -> _System:
     xd = layout.node_dof
     prescribed[xd] = layout.node_x
     fixed[xd] = True
-    for nodes, height in ((layout.messenger_supports, c.messenger_height),
-                          (layout.contact_supports, c.contact_wire_height)):
+    for nodes, height in (
+        (layout.messenger_supports, c.messenger_height),
+        (layout.contact_supports, c.contact_wire_height),
+    ):
         prescribed[xd[nodes] + 1] = height
         fixed[xd[nodes] + 1] = True
         dropped[xd[nodes] + 1] = True
@@ -163,7 +169,9 @@ def initial_guess(layout: Layout) -> tuple[np.ndarray, np.ndarray]:
     lengths = np.empty(n_c + layout.bar_nodes.shape[0])
     lengths[:n_c] = chord / (1.0 + tension / layout.cable_axial_stiffness)
     bends = layout.bar_nodes
-    bar_len = np.hypot(X[xd[bends[:, 1]]] - X[xd[bends[:, 0]]], X[xd[bends[:, 1]] + 1] - X[xd[bends[:, 0]] + 1])
+    bar_len = np.hypot(
+        X[xd[bends[:, 1]]] - X[xd[bends[:, 0]]], X[xd[bends[:, 1]] + 1] - X[xd[bends[:, 0]] + 1]
+    )
     lengths[n_c:] = bar_len * (1.0 - 1e-3)
     return X, lengths
 
@@ -203,7 +211,7 @@ class ShapeEquations:
     def split(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         X = self.system.prescribed.copy()
         X[self.system.free] = y[: self.n_free]
-        return X, y[self.n_free:]
+        return X, y[self.n_free :]
 
     def evaluate(self, y: np.ndarray, jacobian: bool = True) -> tuple[np.ndarray, sp.csc_matrix | None]:
         """Residual (N) and, optionally, its analytic Jacobian with respect to y."""
@@ -254,7 +262,9 @@ def find_shape(layout: Layout, tolerance: float = 1e-11, max_iterations: int = 3
         try:
             step = spla.spsolve(J, -r)
         except RuntimeError as error:  # singular factor
-            raise ShapeFindingError(f"shape-finding failed: singular tangent ({error}); residual {norm:.3e} N") from None
+            raise ShapeFindingError(
+                f"shape-finding failed: singular tangent ({error}); residual {norm:.3e} N"
+            ) from None
         # Backtrack when a full step raises the residual (far from the solution only).
         factor = 1.0
         for _ in range(8):
@@ -271,7 +281,8 @@ def find_shape(layout: Layout, tolerance: float = 1e-11, max_iterations: int = 3
         history.append(norm)
         if not norm < 1e-8 * scale:
             raise ShapeFindingError(
-                f"shape-finding did not converge in {max_iterations} Newton iterations: residual {norm:.3e} N "
+                f"shape-finding did not converge in {max_iterations} Newton iterations: "
+                f"residual {norm:.3e} N "
                 f"({norm / scale:.1e} of the largest tension {scale:g} N)"
             )
     X, lengths = equations.split(y)

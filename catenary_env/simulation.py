@@ -54,8 +54,9 @@ FIDELITIES: dict[str, Fidelity] = {
     # The design studies' setting: 20 spans, statistics on the 10 central ones (SPEC 4).
     "study": Fidelity(),
     # Small enough for unit tests: a short section and a coarse mesh; not for design conclusions.
-    "test": Fidelity(n_spans=5, analysis_spans=1, contact_wire_element=1.5, messenger_wire_element=3.0,
-                     time_step=2e-3),
+    "test": Fidelity(
+        n_spans=5, analysis_spans=1, contact_wire_element=1.5, messenger_wire_element=3.0, time_step=2e-3
+    ),
 }
 
 
@@ -135,11 +136,15 @@ def check_fidelity(catenary: CatenaryDefinition, fidelity: Fidelity) -> None:
     if not (isinstance(f.n_spans, int) and 3 <= f.n_spans <= 200):
         raise DesignError(f"fidelity.n_spans = {f.n_spans!r}: must be an integer in [3, 200]")
     if not (isinstance(f.analysis_spans, int) and 1 <= f.analysis_spans <= f.n_spans - 2):
-        raise DesignError(f"fidelity.analysis_spans = {f.analysis_spans!r}: must be an integer in [1, n_spans - 2]")
+        raise DesignError(
+            f"fidelity.analysis_spans = {f.analysis_spans!r}: must be an integer in [1, n_spans - 2]"
+        )
     for name in ("contact_wire_element", "messenger_wire_element"):
         value = getattr(f, name)
         if not (0.05 <= value <= 0.5 * catenary.span_length):
-            raise DesignError(f"fidelity.{name} = {value!r}: must lie in [0.05, {0.5 * catenary.span_length}] m")
+            raise DesignError(
+                f"fidelity.{name} = {value!r}: must lie in [0.05, {0.5 * catenary.span_length}] m"
+            )
     if not (1e-5 <= f.time_step <= 0.01):
         raise DesignError(f"fidelity.time_step = {f.time_step!r}: must lie in [1e-5, 0.01] s")
 
@@ -148,8 +153,9 @@ def solve_static(catenary: CatenaryDefinition, design: Design, fidelity: Fidelit
     """Check the design and find its static shape (raises ShapeFindingError if Newton fails)."""
     check_design(catenary, design)
     check_fidelity(catenary, fidelity)
-    layout = build_layout(catenary, design, fidelity.n_spans, fidelity.contact_wire_element,
-                          fidelity.messenger_wire_element)
+    layout = build_layout(
+        catenary, design, fidelity.n_spans, fidelity.contact_wire_element, fidelity.messenger_wire_element
+    )
     return find_shape(layout)
 
 
@@ -181,11 +187,18 @@ def simulate_static(
     """
     catenary = static.layout.catenary
     system = linearise(static) if system is None else system
-    trajectory = simulate_passage(system, pantograph, uplift_force, speed, fidelity.time_step, progress=progress,
-                                  prepared=prepared)
+    trajectory = simulate_passage(
+        system, pantograph, uplift_force, speed, fidelity.time_step, progress=progress, prepared=prepared
+    )
     window = analysis_window(catenary, fidelity)
-    stats = contact_statistics(trajectory.position, trajectory.contact_force, fidelity.time_step, window,
-                               trajectory.support_x, trajectory.support_uplift)
+    stats = contact_statistics(
+        trajectory.position,
+        trajectory.contact_force,
+        fidelity.time_step,
+        window,
+        trajectory.support_x,
+        trajectory.support_uplift,
+    )
     return Simulation(static, system, trajectory, stats, window, uplift_force)
 
 
@@ -247,10 +260,13 @@ def evaluate(
     sim = simulate_static(static, pantograph, speed, fidelity, force)
     stats = sim.statistics
     if stats.contact_loss_percent > 0.0:
-        reason = f"dynamic: contact lost {stats.contact_loss_percent:.3f} % of the time in the analysis section"
+        reason = (
+            f"dynamic: contact lost {stats.contact_loss_percent:.3f} % of the time in the analysis section"
+        )
     position, filtered = _trace(sim)
-    return Evaluation(not reason, reason, stats, lengths, forces, force, time.perf_counter() - start,
-                      position, filtered)
+    return Evaluation(
+        not reason, reason, stats, lengths, forces, force, time.perf_counter() - start, position, filtered
+    )
 
 
 def _trace(sim: Simulation) -> tuple[tuple[float, ...], tuple[float, ...]]:
@@ -265,8 +281,10 @@ def _trace(sim: Simulation) -> tuple[tuple[float, ...], tuple[float, ...]]:
 def _central_span(static: StaticSolution, design: Design) -> tuple[tuple[float, ...], tuple[float, ...]]:
     lay = static.layout
     central = lay.dropper_span == lay.n_spans // 2
-    return (tuple(float(v) for v in static.dropper_lengths[central]),
-            tuple(float(v) for v in static.dropper_forces[central]))
+    return (
+        tuple(float(v) for v in static.dropper_lengths[central]),
+        tuple(float(v) for v in static.dropper_forces[central]),
+    )
 
 
 def calibrate_uplift(
@@ -300,7 +318,9 @@ def calibrate_uplift(
     prepared = prepare_passage(system, fidelity.time_step)
 
     def mean_force(uplift: float) -> float:
-        return simulate_static(static, pantograph, speed, fidelity, uplift, system, prepared=prepared).statistics.mean
+        return simulate_static(
+            static, pantograph, speed, fidelity, uplift, system, prepared=prepared
+        ).statistics.mean
 
     x0, f0 = target_mean, mean_force(target_mean) - target_mean
     x1 = x0 - f0

@@ -51,8 +51,14 @@ class StiffnessProfile:
         return float((k.max() - k.min()) / (k.max() + k.min()))
 
 
-def _uplift_at(static: StaticSolution, system: LinearSystem, x: float, force: float, start: np.ndarray,
-               max_iterations: int = 30) -> tuple[float, np.ndarray]:
+def _uplift_at(
+    static: StaticSolution,
+    system: LinearSystem,
+    x: float,
+    force: float,
+    start: np.ndarray,
+    max_iterations: int = 30,
+) -> tuple[float, np.ndarray]:
     """Newton solve of the section pushed up by ``force`` at track position ``x``; returns uplift and X."""
     lay = static.layout
     c = lay.catenary
@@ -77,13 +83,18 @@ def _uplift_at(static: StaticSolution, system: LinearSystem, x: float, force: fl
         J = (state.stiffness + sp.diags(springs)).tocsr()[free][:, free]
         X[free] -= spla.spsolve(J.tocsc(), r)
     else:
-        raise ShapeFindingError(f"uplift solve at x = {x:.2f} m did not converge: residual {np.max(np.abs(r)):.3e} N")
+        raise ShapeFindingError(
+            f"uplift solve at x = {x:.2f} m did not converge: residual {np.max(np.abs(r)):.3e} N"
+        )
     du = X[free] - X0[free]
     return float(h[0] @ du[zd]), X
 
 
 def stiffness_profile(
-    static: StaticSolution, force: float = 100.0, n_points: int = 23, span: int | None = None,
+    static: StaticSolution,
+    force: float = 100.0,
+    n_points: int = 23,
+    span: int | None = None,
     system: LinearSystem | None = None,
 ) -> StiffnessProfile:
     """Stiffness of the contact wire at ``n_points`` equally spaced points of a span (ends included).

@@ -11,14 +11,22 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
+from .design import level_design
 from .presets import load_catenary, load_pantograph
 from .simulation import Fidelity, simulate
-from .design import level_design
 
 VALIDATION_DIR = Path(__file__).parent / "presets" / "validation"
 
-QUANTITIES = ("mean", "std", "statistical_max", "statistical_min", "actual_max", "actual_min",
-              "max_support_uplift", "contact_loss_percent")
+QUANTITIES = (
+    "mean",
+    "std",
+    "statistical_max",
+    "statistical_min",
+    "actual_max",
+    "actual_min",
+    "max_support_uplift",
+    "contact_loss_percent",
+)
 
 
 @dataclass(frozen=True)
@@ -77,11 +85,15 @@ def load_ranges(name: str = "en50318-2002") -> dict[float, dict[str, tuple[float
     """Accepted ranges by speed (km/h) and quantity."""
     with open(VALIDATION_DIR / f"{name}.toml", "rb") as handle:
         data = tomllib.load(handle)
-    return {float(speed): {q: (float(lo), float(hi)) for q, (lo, hi) in table.items()}
-            for speed, table in data["ranges"].items()}
+    return {
+        float(speed): {q: (float(lo), float(hi)) for q, (lo, hi) in table.items()}
+        for speed, table in data["ranges"].items()
+    }
 
 
-def validate(speeds_kmh: tuple[float, ...] = (250.0, 300.0), fidelity: Fidelity | None = None) -> ValidationReport:
+def validate(
+    speeds_kmh: tuple[float, ...] = (250.0, 300.0), fidelity: Fidelity | None = None
+) -> ValidationReport:
     """Simulate the EN 50318:2002 reference model and compare with the accepted ranges.
 
     Parameters
@@ -94,14 +106,21 @@ def validate(speeds_kmh: tuple[float, ...] = (250.0, 300.0), fidelity: Fidelity 
     catenary = load_catenary("en50318-2002")
     pantograph = load_pantograph("en50318-2002")
     if fidelity is None:
-        fidelity = Fidelity(n_spans=catenary.n_spans, analysis_spans=catenary.analysis_spans,
-                            contact_wire_element=0.5, messenger_wire_element=1.0, time_step=1e-3)
+        fidelity = Fidelity(
+            n_spans=catenary.n_spans,
+            analysis_spans=catenary.analysis_spans,
+            contact_wire_element=0.5,
+            messenger_wire_element=1.0,
+            time_step=1e-3,
+        )
     ranges = load_ranges()
     rows = []
     for speed in speeds_kmh:
         if speed not in ranges:
             raise ValueError(f"speed {speed} km/h: the standard gives ranges at {sorted(ranges)} km/h only")
-        stats = simulate(catenary, pantograph, level_design(catenary), speed / 3.6, fidelity).statistics.as_dict()
+        stats = simulate(
+            catenary, pantograph, level_design(catenary), speed / 3.6, fidelity
+        ).statistics.as_dict()
         for quantity in QUANTITIES:
             low, high = ranges[speed][quantity]
             rows.append(ValidationRow(speed, quantity, stats[quantity], low, high))

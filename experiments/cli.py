@@ -19,10 +19,16 @@ STUDIES = {
 def add_parsers(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("experiment", help="run a study of SPEC 7; writes data (CSV) and figures")
     p.add_argument("name", choices=sorted(STUDIES), help="; ".join(f"{k}: {v}" for k, v in STUDIES.items()))
-    p.add_argument("--full", action="store_true", help="the full setting (20 spans, fine grids: minutes to hours); "
-                   "default: the quick setting (minutes)")
+    p.add_argument(
+        "--full",
+        action="store_true",
+        help="the full setting (20 spans, fine grids: minutes to hours); "
+        "default: the quick setting (minutes)",
+    )
     p.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
-    p = sub.add_parser("report", help="re-make every study's tables and figures from its data, without simulating")
+    p = sub.add_parser(
+        "report", help="re-make every study's tables and figures from its data, without simulating"
+    )
     p.add_argument("--out", type=Path, default=DEFAULT_OUT, help="the studies' folder (default: results)")
 
 
@@ -47,4 +53,7 @@ def run_report(args: argparse.Namespace) -> int:
     return 0
 
 
-HANDLERS: dict[str, Callable[[argparse.Namespace], int]] = {"experiment": run_experiment, "report": run_report}
+HANDLERS: dict[str, Callable[[argparse.Namespace], int]] = {
+    "experiment": run_experiment,
+    "report": run_report,
+}

@@ -37,15 +37,35 @@ def main(config: Config) -> Path:
     n_spans, analysis = (20, 10) if config.full else (5, 1)
     rows = []
     for element, dt in SETTINGS:
-        fidelity = Fidelity(n_spans=n_spans, analysis_spans=analysis, contact_wire_element=element,
-                            messenger_wire_element=2 * element, time_step=dt)
+        fidelity = Fidelity(
+            n_spans=n_spans,
+            analysis_spans=analysis,
+            contact_wire_element=element,
+            messenger_wire_element=2 * element,
+            time_step=dt,
+        )
         start = time.perf_counter()
-        sim = simulate(catenary, pantograph, level_design(catenary), config.speed_kmh / 3.6, fidelity,
-                       config.uplift_force)
-        rows.append({"n_spans": n_spans, "contact_wire_element_m": element, "messenger_wire_element_m": 2 * element,
-                     "time_step_s": dt, "n_dofs": sim.system.n_dofs, "sigma_N": sim.statistics.std,
-                     "mean_N": sim.statistics.mean, "actual_max_N": sim.statistics.actual_max,
-                     "wall_time_s": time.perf_counter() - start})
+        sim = simulate(
+            catenary,
+            pantograph,
+            level_design(catenary),
+            config.speed_kmh / 3.6,
+            fidelity,
+            config.uplift_force,
+        )
+        rows.append(
+            {
+                "n_spans": n_spans,
+                "contact_wire_element_m": element,
+                "messenger_wire_element_m": 2 * element,
+                "time_step_s": dt,
+                "n_dofs": sim.system.n_dofs,
+                "sigma_N": sim.statistics.std,
+                "mean_N": sim.statistics.mean,
+                "actual_max_N": sim.statistics.actual_max,
+                "wall_time_s": time.perf_counter() - start,
+            }
+        )
         print(f"  element {element} m, dt {dt * 1e3:g} ms: σ = {sim.statistics.std:.3f} N", flush=True)
     finest = rows[-1]["sigma_N"]
     for row in rows:
@@ -59,11 +79,18 @@ def main(config: Config) -> Path:
 def report(folder: Path) -> str:
     """Markdown table from the CSV (no simulation)."""
     rows = read_csv(folder / "convergence.csv")
-    table = markdown_table(rows, [("contact_wire_element_m", "CW element (m)", "g"),
-                                  ("messenger_wire_element_m", "MW element (m)", "g"),
-                                  ("time_step_s", "Δt (s)", "g"), ("n_dofs", "DOFs", ".0f"),
-                                  ("sigma_N", "σ (N)", ".3f"), ("change_vs_finest_percent", "vs finest (%)", "+.2f"),
-                                  ("wall_time_s", "time (s)", ".1f")])
+    table = markdown_table(
+        rows,
+        [
+            ("contact_wire_element_m", "CW element (m)", "g"),
+            ("messenger_wire_element_m", "MW element (m)", "g"),
+            ("time_step_s", "Δt (s)", "g"),
+            ("n_dofs", "DOFs", ".0f"),
+            ("sigma_N", "σ (N)", ".3f"),
+            ("change_vs_finest_percent", "vs finest (%)", "+.2f"),
+            ("wall_time_s", "time (s)", ".1f"),
+        ],
+    )
     (folder / "convergence.md").write_text(table + "\n", encoding="utf-8")
     return table
 

@@ -49,16 +49,29 @@ def main(config: Config) -> Path:
     tasks = [(name, speed) for name in PROBLEMS for speed in config.speeds_kmh]
     # The uplift is calibrated once per catenary and speed, here, so the workers need not repeat it.
     uplift = {(name, speed): get_problem(name).uplift_force(speed, config.fidelity) for name, speed in tasks}
-    jobs = [(name, (s,), speed, config.fidelity, uplift[(name, speed)])
-            for name, speed in tasks for s in config.presags]
+    jobs = [
+        (name, (s,), speed, config.fidelity, uplift[(name, speed)])
+        for name, speed in tasks
+        for s in config.presags
+    ]
     with ProcessPoolExecutor(max_workers=config.workers) as pool:
         results = list(pool.map(evaluate_problem, *zip(*jobs, strict=True)))
     rows = []
     for (name, (s,), speed, _, force), ev in zip(jobs, results, strict=True):
         stats = ev.statistics
-        rows.append({"problem": name, "catenary": get_problem(name).catenary, "speed_kmh": speed, "presag_m": s,
-                     "feasible": int(ev.feasible), "sigma_N": stats.std if stats else float("nan"),
-                     "mean_N": stats.mean if stats else float("nan"), "uplift_N": force, "reason": ev.reason})
+        rows.append(
+            {
+                "problem": name,
+                "catenary": get_problem(name).catenary,
+                "speed_kmh": speed,
+                "presag_m": s,
+                "feasible": int(ev.feasible),
+                "sigma_N": stats.std if stats else float("nan"),
+                "mean_N": stats.mean if stats else float("nan"),
+                "uplift_N": force,
+                "reason": ev.reason,
+            }
+        )
     folder = study_dir(config.out, NAME)
     write_csv(folder / "presag.csv", rows)
     report(folder)
@@ -70,12 +83,21 @@ def best_presag(rows: list[dict]) -> list[dict]:
     out = []
     for name in dict.fromkeys(r["problem"] for r in rows):
         for speed in sorted({r["speed_kmh"] for r in rows if r["problem"] == name}):
-            candidates = [r for r in rows if r["problem"] == name and r["speed_kmh"] == speed and r["feasible"]]
+            candidates = [
+                r for r in rows if r["problem"] == name and r["speed_kmh"] == speed and r["feasible"]
+            ]
             level = next((r for r in candidates if r["presag_m"] == 0.0), None)
             if candidates:
                 best = min(candidates, key=lambda r: r["sigma_N"])
-                out.append({"problem": name, "speed_kmh": speed, "best_presag_m": best["presag_m"],
-                            "sigma_N": best["sigma_N"], "level_sigma_N": level["sigma_N"] if level else float("nan")})
+                out.append(
+                    {
+                        "problem": name,
+                        "speed_kmh": speed,
+                        "best_presag_m": best["presag_m"],
+                        "sigma_N": best["sigma_N"],
+                        "level_sigma_N": level["sigma_N"] if level else float("nan"),
+                    }
+                )
     return out
 
 
@@ -85,9 +107,17 @@ def report(folder: Path) -> str:
     best = best_presag(rows)
     for b in best:
         b["reduction_percent"] = 100.0 * (1.0 - b["sigma_N"] / b["level_sigma_N"])
-    table = markdown_table(best, [("problem", "problem", "s"), ("speed_kmh", "speed (km/h)", "g"),
-                                  ("best_presag_m", "best pre-sag (m)", ".2f"), ("sigma_N", "σ (N)", ".2f"),
-                                  ("level_sigma_N", "σ level (N)", ".2f"), ("reduction_percent", "reduction (%)", ".1f")])
+    table = markdown_table(
+        best,
+        [
+            ("problem", "problem", "s"),
+            ("speed_kmh", "speed (km/h)", "g"),
+            ("best_presag_m", "best pre-sag (m)", ".2f"),
+            ("sigma_N", "σ (N)", ".2f"),
+            ("level_sigma_N", "σ level (N)", ".2f"),
+            ("reduction_percent", "reduction (%)", ".1f"),
+        ],
+    )
     (folder / "presag.md").write_text(table + "\n", encoding="utf-8")
     _figure(rows, best, folder / "presag.png")
     return table
@@ -102,10 +132,21 @@ def _figure(rows: list[dict], best: list[dict], path: Path) -> None:
         pick = [r for r in rows if r["problem"] == name and r["speed_kmh"] == 300.0]
         if pick:
             feasible = [r for r in pick if r["feasible"]]
-            left.plot([1e3 * r["presag_m"] for r in feasible], [r["sigma_N"] for r in feasible], "o-",
-                      color=f"C{i}", label=f"{pick[0]['catenary']} ({name})")
+            left.plot(
+                [1e3 * r["presag_m"] for r in feasible],
+                [r["sigma_N"] for r in feasible],
+                "o-",
+                color=f"C{i}",
+                label=f"{pick[0]['catenary']} ({name})",
+            )
         b = [r for r in best if r["problem"] == name]
-        right.plot([r["speed_kmh"] for r in b], [1e3 * r["best_presag_m"] for r in b], "o-", color=f"C{i}", label=name)
+        right.plot(
+            [r["speed_kmh"] for r in b],
+            [1e3 * r["best_presag_m"] for r in b],
+            "o-",
+            color=f"C{i}",
+            label=name,
+        )
     left.set_xlabel("pre-sag at mid-span (mm)")
     left.set_ylabel("σ of the contact force (N)")
     left.set_title("300 km/h")
@@ -121,7 +162,9 @@ def _figure(rows: list[dict], best: list[dict], path: Path) -> None:
 
 def cli(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--full", action="store_true", help="20 spans on the 1 cm grid (hours) instead of quick")
+    parser.add_argument(
+        "--full", action="store_true", help="20 spans on the 1 cm grid (hours) instead of quick"
+    )
     parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
     args = parser.parse_args(argv)

@@ -27,8 +27,18 @@ class Config:
 
 def main(config: Config) -> Path:
     result = validate((250.0, 300.0))
-    rows = [{"speed_kmh": r.speed_kmh, "quantity": r.quantity, "value": r.value, "low": r.low, "high": r.high,
-             "passed": int(r.passed), "margin": r.margin} for r in result.rows]
+    rows = [
+        {
+            "speed_kmh": r.speed_kmh,
+            "quantity": r.quantity,
+            "value": r.value,
+            "low": r.low,
+            "high": r.high,
+            "passed": int(r.passed),
+            "margin": r.margin,
+        }
+        for r in result.rows
+    ]
     folder = study_dir(config.out, NAME)
     write_csv(folder / "en50318.csv", rows)
     report(folder)
@@ -40,11 +50,16 @@ def report(folder: Path) -> str:
     rows = read_csv(folder / "en50318.csv")
     lines = ["| speed (km/h) | quantity | value | accepted range | result |", "|---|---|---|---|---|"]
     for r in rows:
-        scale, unit = (1e3, "mm") if r["quantity"] == "max_support_uplift" else (
-            1.0, "%" if "percent" in r["quantity"] else "N")
+        scale, unit = (
+            (1e3, "mm")
+            if r["quantity"] == "max_support_uplift"
+            else (1.0, "%" if "percent" in r["quantity"] else "N")
+        )
         verdict = "pass" if r["passed"] else f"FAIL (by {scale * r['margin']:.2f} {unit})"
-        lines.append(f"| {r['speed_kmh']:g} | {r['quantity']} | {scale * r['value']:.2f} {unit} | "
-                     f"{scale * r['low']:g} – {scale * r['high']:g} | {verdict} |")
+        lines.append(
+            f"| {r['speed_kmh']:g} | {r['quantity']} | {scale * r['value']:.2f} {unit} | "
+            f"{scale * r['low']:g} – {scale * r['high']:g} | {verdict} |"
+        )
     table = "\n".join(lines)
     (folder / "en50318.md").write_text(table + "\n", encoding="utf-8")
     _figure(rows, folder / "en50318.png")
@@ -64,10 +79,13 @@ def _figure(rows: list[dict], path: Path) -> None:
             ax.plot(i, scale * r["value"], "o", color="C2" if r["passed"] else "C3")
         ax.set_xticks([0, 1], ["250", "300"])
         ax.set_xlim(-0.6, 1.6)
-        ax.set_title(quantity.replace("_", " ") + (" (mm)" if quantity == "max_support_uplift" else " (N)"),
-                     fontsize=8)
+        ax.set_title(
+            quantity.replace("_", " ") + (" (mm)" if quantity == "max_support_uplift" else " (N)"), fontsize=8
+        )
         ax.tick_params(labelsize=7)
-    fig.suptitle("EN 50318:2002: simulated value (dot) and accepted range (bar) at 250 and 300 km/h", fontsize=9)
+    fig.suptitle(
+        "EN 50318:2002: simulated value (dot) and accepted range (bar) at 250 and 300 km/h", fontsize=9
+    )
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

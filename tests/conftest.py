@@ -9,7 +9,9 @@ from catenary_env.presets import load_catenary, load_pantograph
 from catenary_env.shape_finding import StaticSolution
 from catenary_env.simulation import Fidelity, solve_static
 
-SHORT = Fidelity(n_spans=5, analysis_spans=1, contact_wire_element=1.0, messenger_wire_element=2.0, time_step=2e-3)
+SHORT = Fidelity(
+    n_spans=5, analysis_spans=1, contact_wire_element=1.0, messenger_wire_element=2.0, time_step=2e-3
+)
 
 
 @pytest.fixture(scope="session")

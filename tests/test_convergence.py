@@ -15,10 +15,21 @@ from catenary_env.simulation import Fidelity, simulate
 def sigmas(benchmark_catenary, benchmark_pantograph_definition):
     out = []
     for element, dt in ((1.0, 2e-3), (0.5, 1e-3), (0.25, 5e-4)):
-        fidelity = Fidelity(n_spans=5, analysis_spans=1, contact_wire_element=element,
-                            messenger_wire_element=2 * element, time_step=dt)
-        sim = simulate(benchmark_catenary, benchmark_pantograph_definition, level_design(benchmark_catenary),
-                       300 / 3.6, fidelity, uplift_force=170.0)
+        fidelity = Fidelity(
+            n_spans=5,
+            analysis_spans=1,
+            contact_wire_element=element,
+            messenger_wire_element=2 * element,
+            time_step=dt,
+        )
+        sim = simulate(
+            benchmark_catenary,
+            benchmark_pantograph_definition,
+            level_design(benchmark_catenary),
+            300 / 3.6,
+            fidelity,
+            uplift_force=170.0,
+        )
         out.append(sim.statistics.std)
     return out
 

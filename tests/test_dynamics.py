@@ -43,7 +43,9 @@ def test_newmark_converges_at_second_order_on_a_linear_oscillator():
     omega_d = omega * np.sqrt(1 - zeta**2)
 
     def exact(t):
-        return np.exp(-zeta * omega * t) * (np.cos(omega_d * t) + zeta * omega / omega_d * np.sin(omega_d * t))
+        return np.exp(-zeta * omega * t) * (
+            np.cos(omega_d * t) + zeta * omega / omega_d * np.sin(omega_d * t)
+        )
 
     errors = []
     for dt in (4e-3, 2e-3, 1e-3, 5e-4):
@@ -65,8 +67,12 @@ def _string(monkeypatch, span: float, support_stiffness: float, element: float):
     monkeypatch.setattr("catenary_env.assembly.GRAVITY", 0.0)
     base = load_catenary("benchmark")
     catenary = dataclasses.replace(
-        base, span_length=span, dropper_positions=(0.5 * span,),
-        supports=dataclasses.replace(base.supports, steady_arm_stiffness=support_stiffness, steady_arm_mass=0.0),
+        base,
+        span_length=span,
+        dropper_positions=(0.5 * span,),
+        supports=dataclasses.replace(
+            base.supports, steady_arm_stiffness=support_stiffness, steady_arm_mass=0.0
+        ),
         damping=dataclasses.replace(base.damping, alpha=0.0, beta=0.0),
     )
     system = linearise(find_shape(build_layout(catenary, Design((), ()), 1, element, 4 * element)))
@@ -124,13 +130,19 @@ def test_natural_frequencies_of_a_tensioned_beam(monkeypatch):
     catenary, system = _string(monkeypatch, span, 1e12, 0.5)
     wire = catenary.contact_wire
     lay = system.static.layout
-    cw = np.isin(system.free, np.r_[[lay.node_dof[i] + k for i in np.flatnonzero(lay.node_kind == CONTACT)
-                                     for k in (1, 3)]])
+    cw = np.isin(
+        system.free,
+        np.r_[[lay.node_dof[i] + k for i in np.flatnonzero(lay.node_kind == CONTACT) for k in (1, 3)]],
+    )
     M = system.mass.toarray()[np.ix_(cw, cw)]
     K = system.stiffness.toarray()[np.ix_(cw, cw)]
     omega2 = sla.eigh(K, M, eigvals_only=True, subset_by_index=[0, 5])
     frequencies = np.sqrt(omega2) / (2 * np.pi)
     n = np.arange(1, 7)
-    exact = n * wire.wave_speed / (2 * span) * np.sqrt(
-        1 + (n * np.pi) ** 2 * wire.bending_stiffness / (wire.tension * span**2))
+    exact = (
+        n
+        * wire.wave_speed
+        / (2 * span)
+        * np.sqrt(1 + (n * np.pi) ** 2 * wire.bending_stiffness / (wire.tension * span**2))
+    )
     assert np.allclose(frequencies, exact, rtol=1e-3), (frequencies, exact)

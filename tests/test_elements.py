@@ -15,8 +15,16 @@ def _cables(seed: int = 0, n: int = 4) -> tuple[np.ndarray, np.ndarray]:
     for e in range(n):
         angle, stretch = rng.uniform(-0.3, 0.3), 1.0 + rng.uniform(-0.01, 0.02)
         end = length[e] * stretch * np.array([np.cos(angle), np.sin(angle)])
-        q[e] = [0, 0, stretch * np.cos(angle) + 0.05 * rng.normal(), stretch * np.sin(angle) + 0.05 * rng.normal(),
-                end[0], end[1], stretch * np.cos(angle + 0.1), stretch * np.sin(angle + 0.1)]
+        q[e] = [
+            0,
+            0,
+            stretch * np.cos(angle) + 0.05 * rng.normal(),
+            stretch * np.sin(angle) + 0.05 * rng.normal(),
+            end[0],
+            end[1],
+            stretch * np.cos(angle + 0.1),
+            stretch * np.sin(angle + 0.1),
+        ]
     return q, length
 
 
@@ -29,10 +37,14 @@ def test_cable_tangent_matches_finite_differences():
     for k in range(8):
         dq = np.zeros(8)
         dq[k] = h
-        fd[:, :, k] = (cable_state(q + dq, length, ea, ei, False).force
-                       - cable_state(q - dq, length, ea, ei, False).force) / (2 * h)
+        fd[:, :, k] = (
+            cable_state(q + dq, length, ea, ei, False).force
+            - cable_state(q - dq, length, ea, ei, False).force
+        ) / (2 * h)
     assert np.max(np.abs(fd - state.stiffness)) < 1e-7 * np.max(np.abs(state.stiffness))
-    fd_len = (cable_state(q, length + h, ea, ei, False).force - cable_state(q, length - h, ea, ei, False).force) / (2 * h)
+    fd_len = (
+        cable_state(q, length + h, ea, ei, False).force - cable_state(q, length - h, ea, ei, False).force
+    ) / (2 * h)
     assert np.max(np.abs(fd_len - state.force_dlength)) < 1e-7 * np.max(np.abs(fd_len))
 
 
@@ -66,7 +78,12 @@ def test_bar_tangent_and_length_derivative_match_finite_differences():
     for k in range(4):
         dq = np.zeros(4)
         dq[k] = h
-        fd = (bar_state(q + dq, reference, stiffness, ea).force - bar_state(q - dq, reference, stiffness, ea).force) / (2 * h)
+        fd = (
+            bar_state(q + dq, reference, stiffness, ea).force
+            - bar_state(q - dq, reference, stiffness, ea).force
+        ) / (2 * h)
         assert np.allclose(fd, state.stiffness[:, :, k], rtol=1e-6, atol=1e-3)
-    fd_len = (bar_state(q, reference + h, stiffness, ea).force - bar_state(q, reference - h, stiffness, ea).force) / (2 * h)
+    fd_len = (
+        bar_state(q, reference + h, stiffness, ea).force - bar_state(q, reference - h, stiffness, ea).force
+    ) / (2 * h)
     assert np.allclose(fd_len, state.force_dlength, rtol=1e-6, atol=1e-3)

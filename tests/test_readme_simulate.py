@@ -1,4 +1,4 @@
-"""The README's simulator example runs as printed and gives the recorded σ (STYLE: doc examples are tested)."""
+"""The README's simulator example runs as printed and gives the recorded σ (STYLE: doc examples are run)."""
 
 from __future__ import annotations
 

@@ -6,6 +6,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from conftest import SHORT
 from scipy.optimize import brentq
 
 from catenary_env.design import GRAVITY, Design, DesignError, check_design, level_design, presag_design
@@ -13,8 +14,6 @@ from catenary_env.layout import CONTACT, MESSENGER, build_layout
 from catenary_env.shape_finding import ShapeEquations, ShapeFindingError, find_shape, initial_guess
 from catenary_env.simulation import Fidelity, solve_static
 from catenary_env.static_analysis import stiffness_profile
-
-from conftest import SHORT
 
 
 @pytest.mark.parametrize("name", ["benchmark_static", "stitched_static"])
@@ -32,7 +31,9 @@ def _horizontal_tension(static):
     lay = static.layout
     n_c = lay.cable_nodes.shape[0]
     q = static.positions[lay.cable_dofs()]
-    state = cable_state(q, static.lengths[:n_c], lay.cable_axial_stiffness, lay.cable_bending_stiffness, False)
+    state = cable_state(
+        q, static.lengths[:n_c], lay.cable_axial_stiffness, lay.cable_bending_stiffness, False
+    )
     return state.force[:, 4]
 
 
@@ -48,7 +49,9 @@ def test_every_wire_element_carries_its_wire_tension(name, request):
         middle = 0.5 * (lay.node_x[lay.cable_nodes[:, 0]] + lay.node_x[lay.cable_nodes[:, 1]])
         half = 0.5 * c.stitch_wire.length
         inside = np.any(np.abs(middle[:, None] - lay.support_x[None, 1:-1]) < half, axis=1)
-        expected = np.where(inside & (lay.cable_wire == MESSENGER), expected - c.stitch_wire.tension, expected)
+        expected = np.where(
+            inside & (lay.cable_wire == MESSENGER), expected - c.stitch_wire.tension, expected
+        )
     assert np.max(np.abs(horizontal / expected - 1.0)) < 1e-6
 
 
@@ -71,7 +74,9 @@ def test_contact_wire_height_at_every_dropper_is_the_design(benchmark_catenary, 
     heights = static.positions[lay.node_dof[cw_nodes] + 1]
     expected = benchmark_catenary.contact_wire_height + np.tile(design.contact_wire_offsets, lay.n_spans)
     assert np.max(np.abs(heights - expected)) < 1e-6
-    assert np.allclose(static.positions[lay.node_dof[lay.contact_supports] + 1], benchmark_catenary.contact_wire_height)
+    assert np.allclose(
+        static.positions[lay.node_dof[lay.contact_supports] + 1], benchmark_catenary.contact_wire_height
+    )
 
 
 def test_droppers_and_steady_arms_carry_the_weight_of_a_span(benchmark_static):
@@ -79,7 +84,11 @@ def test_droppers_and_steady_arms_carry_the_weight_of_a_span(benchmark_static):
     c = lay.catenary
     span = lay.n_spans // 2
     x_mid = 0.5 * (lay.node_x[lay.cable_nodes[:, 0]] + lay.node_x[lay.cable_nodes[:, 1]])
-    in_span = (lay.cable_wire == CONTACT) & (x_mid > span * lay.span_length) & (x_mid < (span + 1) * lay.span_length)
+    in_span = (
+        (lay.cable_wire == CONTACT)
+        & (x_mid > span * lay.span_length)
+        & (x_mid < (span + 1) * lay.span_length)
+    )
     n_c = lay.cable_nodes.shape[0]
     wire = c.contact_wire.linear_mass * GRAVITY * benchmark_static.lengths[:n_c][in_span].sum()
     droppers = lay.dropper_span == span
@@ -88,13 +97,17 @@ def test_droppers_and_steady_arms_carry_the_weight_of_a_span(benchmark_static):
     supports = lay.node_dof[lay.contact_supports[[span, span + 1]]] + 1
     # An interior support sits between two equal spans: each takes half its reaction; the steady-arm
     # mass hangs there too.
-    carried = benchmark_static.dropper_forces[droppers].sum() + 0.5 * benchmark_static.reactions[supports].sum()
+    carried = (
+        benchmark_static.dropper_forces[droppers].sum() + 0.5 * benchmark_static.reactions[supports].sum()
+    )
     weight = wire + clamps + dropper_halves + c.supports.steady_arm_mass * GRAVITY
     assert carried == pytest.approx(weight, rel=1e-6)
 
 
 def test_spans_are_identical_away_from_the_ends(benchmark_catenary):
-    static = solve_static(benchmark_catenary, level_design(benchmark_catenary), dataclasses.replace(SHORT, n_spans=7))
+    static = solve_static(
+        benchmark_catenary, level_design(benchmark_catenary), dataclasses.replace(SHORT, n_spans=7)
+    )
     lengths = static.dropper_lengths.reshape(7, -1)
     departure = [np.max(np.abs(lengths[k] - lengths[3])) for k in range(3)]
     # The end spans differ (the wire ends there); the difference dies out span by span.
@@ -125,12 +138,17 @@ def test_single_tensioned_cable_sags_as_the_elastic_catenary(benchmark_catenary,
     )
     layout = build_layout(flexible, Design((), ()), 1, element, element)
     static = find_shape(layout)
-    for kind, wire, height in ((CONTACT, flexible.contact_wire, flexible.contact_wire_height),
-                               (MESSENGER, flexible.messenger_wire, flexible.messenger_height)):
-        mid = np.flatnonzero((layout.node_kind == kind) & np.isclose(layout.node_x, 0.5 * layout.span_length))[0]
+    for kind, wire, height in (
+        (CONTACT, flexible.contact_wire, flexible.contact_wire_height),
+        (MESSENGER, flexible.messenger_wire, flexible.messenger_height),
+    ):
+        mid = np.flatnonzero(
+            (layout.node_kind == kind) & np.isclose(layout.node_x, 0.5 * layout.span_length)
+        )[0]
         sag = height - static.positions[layout.node_dof[mid] + 1]
-        expected = _elastic_catenary_sag(layout.span_length, wire.tension, wire.linear_mass * GRAVITY,
-                                         wire.axial_stiffness)
+        expected = _elastic_catenary_sag(
+            layout.span_length, wire.tension, wire.linear_mass * GRAVITY, wire.axial_stiffness
+        )
         assert sag == pytest.approx(expected, rel=1e-6)
 
 
@@ -161,7 +179,9 @@ def test_stiffness_is_higher_at_the_supports_than_at_mid_span(benchmark_static):
 def test_a_dropper_below_its_neighbours_is_in_compression(benchmark_catenary):
     offsets = [0.0] * 9
     offsets[3] = offsets[5] = -0.05  # symmetric: droppers 4 and 6 pull the wire 5 cm below the others
-    static = solve_static(benchmark_catenary, Design(benchmark_catenary.dropper_positions, tuple(offsets)), SHORT)
+    static = solve_static(
+        benchmark_catenary, Design(benchmark_catenary.dropper_positions, tuple(offsets)), SHORT
+    )
     reason = static.infeasibility()
     assert "compression" in reason and "dropper 4" in reason
 
@@ -174,9 +194,11 @@ def test_a_design_needing_a_negative_dropper_length_is_refused_before_any_solve(
 
 @pytest.mark.parametrize(
     ("positions", "match"),
-    [((0.0, 27.5, 55.0), r"dropper_positions\[0\].*inside the span"),
-     ((10.0, 9.0, 46.0), r"must not cross"),
-     ((4.5, 27.5, 60.0), r"inside the span")],
+    [
+        ((0.0, 27.5, 55.0), r"dropper_positions\[0\].*inside the span"),
+        ((10.0, 9.0, 46.0), r"must not cross"),
+        ((4.5, 27.5, 60.0), r"inside the span"),
+    ],
 )
 def test_bad_dropper_positions_are_refused(benchmark_catenary, positions, match):
     with pytest.raises(DesignError, match=match):

@@ -34,7 +34,9 @@ def _cases():
 @pytest.mark.parametrize(("speed", "quantity"), list(_cases()))
 def test_en50318_quantity_is_inside_its_accepted_range(report, speed, quantity):
     row = next(r for r in report.rows if r.speed_kmh == speed and r.quantity == quantity)
-    assert row.low <= row.value <= row.high, f"{quantity} at {speed:g} km/h = {row.value:.4g}, range {row.low}–{row.high}"
+    assert row.low <= row.value <= row.high, (
+        f"{quantity} at {speed:g} km/h = {row.value:.4g}, range {row.low}–{row.high}"
+    )
 
 
 def test_the_ranges_are_the_standards_table():
