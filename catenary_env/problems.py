@@ -40,7 +40,7 @@ from . import simulation
 from .definition import CatenaryDefinition, PantographDefinition
 from .design import Design, DesignError, check_design, check_speed, presag_design, symmetric_design
 from .presets import load_catenary, load_pantograph
-from .simulation import FIDELITIES, Evaluation, Fidelity
+from .simulation import FIDELITIES, Evaluation, Fidelity, model_fingerprint
 
 __all__ = [
     "HEIGHT_STEP",
@@ -277,6 +277,11 @@ class DesignProblem:
         return _calibrated_uplift(
             self.catenary, self.reference_design(), float(speed_kmh), resolve_fidelity(fidelity)
         )
+
+    def fingerprint(self) -> str:
+        """Hash of the catenary, pantograph and variables: results are reusable only under the same one."""
+        return model_fingerprint(self.catenary_definition, self.pantograph_definition, self.variables,
+                                 self.lower.tolist(), self.upper.tolist(), self.step.tolist())
 
     def reference_evaluation(
         self, speed_kmh: float = 300.0, fidelity: str | Fidelity = "study"

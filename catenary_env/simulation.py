@@ -25,6 +25,32 @@ from .shape_finding import ShapeFindingError, StaticSolution, find_shape
 from .statistics import ContactStatistics, contact_statistics, lowpass
 
 
+PHYSICS_REVISION = 1
+"""Raised whenever a change of the simulator changes its results, so that stored results of older
+revisions are not reused (it is part of :func:`model_fingerprint`)."""
+
+
+def model_fingerprint(*records: object) -> str:
+    """A short hash of definitions' data (provenance excluded) and :data:`PHYSICS_REVISION`.
+
+    Two evaluations may share a cached result only when their fingerprints agree: an edited copy of a
+    preset that keeps its name, or a new simulator revision, gets a new fingerprint.
+    """
+    import dataclasses
+    import hashlib
+    import json
+
+    def plain(record: object) -> object:
+        if dataclasses.is_dataclass(record) and not isinstance(record, type):
+            data = dataclasses.asdict(record)
+            data.pop("provenance", None)
+            return data
+        return record
+
+    text = json.dumps([PHYSICS_REVISION, *map(plain, records)], sort_keys=True, default=repr)
+    return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+
 @dataclass(frozen=True)
 class Fidelity:
     """Model size and resolution.

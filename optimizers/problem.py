@@ -128,6 +128,7 @@ class GridSpace:
     lower: NDArray[np.float64]
     upper: NDArray[np.float64]
     step: NDArray[np.float64]
+    model: str = ""
 
     def __post_init__(self) -> None:
         n = len(self.variable_names)
@@ -143,7 +144,14 @@ class GridSpace:
     @classmethod
     def from_problem(cls, problem: GridProblem) -> GridSpace:
         """The grid of a :class:`GridProblem`."""
-        return cls(problem.name, tuple(problem.variable_names), problem.lower, problem.upper, problem.step)
+        return cls(problem.name, tuple(problem.variable_names), problem.lower, problem.upper, problem.step,
+                   str(getattr(problem, "model_fingerprint", "")))
+
+    @property
+    def store_key(self) -> str:
+        """The problem's name in the run store: with the model's fingerprint where the problem has one, so
+        that results of another model (an edited preset, another simulator revision) are never reused."""
+        return f"{self.name}@{self.model}" if self.model else self.name
 
     @property
     def n_variables(self) -> int:
@@ -225,6 +233,7 @@ class CatenaryProblem:
     lower: NDArray[np.float64]
     upper: NDArray[np.float64]
     step: NDArray[np.float64]
+    model_fingerprint: str = ""
 
     @property
     def simulate(self) -> SimulateFunction:
@@ -251,6 +260,7 @@ def catenary_problem(name: str) -> CatenaryProblem:
         np.array(problem.lower, dtype=np.float64),
         np.array(problem.upper, dtype=np.float64),
         np.array(problem.step, dtype=np.float64),
+        problem.fingerprint(),
     )
 
 

@@ -302,7 +302,7 @@ def train_design_policy(
     run_options = {"env": dataclasses.asdict(env_spec), "ppo": dataclasses.asdict(settings)}
     speed = None if env_spec.speed_range is not None else env_spec.speed_kmh
     config = RunConfig(
-        "ppo", space.name, int(budget), int(seed), speed, env_spec.fidelity,
+        "ppo", space.store_key, int(budget), int(seed), speed, env_spec.fidelity,
         json.dumps(run_options, sort_keys=True), package_version(),
     )  # fmt: skip
     with ExitStack() as stack:

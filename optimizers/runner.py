@@ -98,7 +98,7 @@ def optimize(
             f"{optimizer}: options must be a {spec.options_class.__name__}, got {type(settings).__name__}"
         )
     config = RunConfig(
-        optimizer, space.name, int(budget), int(seed), float(speed_kmh), fidelity, options_json(settings),
+        optimizer, space.store_key, int(budget), int(seed), float(speed_kmh), fidelity, options_json(settings),
         package_version(),
     )  # fmt: skip
     cap = 10 * int(budget) if max_evaluations is None else int(max_evaluations)
@@ -200,7 +200,7 @@ class _BatchEvaluator:
             return None, 0  # a duplicate within the batch: filled when the first one is simulated
         if charged + 1 > self.recorder.config.budget:
             return None, 1  # over budget: the caller cuts the batch here
-        outcome = self.recorder.store.lookup(self.space.name, key, self.speed_kmh, self.fidelity)
+        outcome = self.recorder.store.lookup(self.space.store_key, key, self.speed_kmh, self.fidelity)
         if outcome is None:
             return None, 1
         self.seen[key] = outcome
