@@ -154,6 +154,9 @@ def cmd_static(args: argparse.Namespace) -> int:
         "reason": static.infeasibility(),
         "dropper_lengths": static.dropper_lengths[central].tolist(),
         "dropper_forces": static.dropper_forces[central].tolist(),
+        "wire_tension_range": {
+            wire: [float(t.min()), float(t.max())] for wire, t in static.wire_tensions.items()
+        },
         "residual": static.residual_history[-1],
         "newton_iterations": len(static.residual_history) - 1,
         "wall_time": elapsed,
@@ -180,6 +183,8 @@ def cmd_static(args: argparse.Namespace) -> int:
             f"({result['newton_iterations']} Newton iterations, residual {result['residual']:.1e} N)"
         )
         print("feasible" if result["feasible"] else f"INFEASIBLE: {result['reason']}")
+        for wire, (low, high) in result["wire_tension_range"].items():
+            print(f"{wire.replace('_', ' ')} axial force: {low:.0f} to {high:.0f} N")
         print(f"{'dropper':>8} {'x (m)':>8} {'Δh (mm)':>8} {'length (m)':>11} {'force (N)':>10}")
         for i, (x, dh, length, force) in enumerate(
             zip(

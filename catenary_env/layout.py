@@ -5,6 +5,13 @@ Nodes of the contact wire (CW) and messenger wire (MW) are ANCF nodes with four 
 dropper points and, between them, at equal intervals no longer than the fidelity's element length.
 Nodes are numbered in order of x so that the matrices are banded.
 
+The messenger passes over each interior support as over a saddle: the support's reaction (about a
+kilonewton) kinks it, by a few hundredths of a radian, over the bending length sqrt(EI/T) ≈ 0.1 m. A
+cubic (C¹) element cannot bend that sharply across one node; it spreads the kink over the adjacent
+elements, which then carry a spurious axial-strain swing and shift the dropper lengths by millimetres
+at a 1 m mesh. So the messenger's node at an interior support is a hinge: one position, and a
+separate position gradient for each side (6 coordinates).
+
 Stitch wires hang at the interior supports only; at the two end supports of the section the first
 dropper hangs from the messenger. Only the end spans, outside the analysis section, see this.
 """
@@ -100,6 +107,7 @@ class Layout:
     wire_ends: np.ndarray
     mass_nodes: np.ndarray
     mass_values: np.ndarray
+    cable_dof_table: np.ndarray
 
     @property
     def n_droppers(self) -> int:
@@ -107,8 +115,13 @@ class Layout:
 
     def cable_dofs(self) -> np.ndarray:
         """Global indices of the 8 coordinates of each cable element; shape (Ec, 8)."""
-        start = self.node_dof[self.cable_nodes]  # (Ec, 2)
-        return (start[:, :, None] + np.arange(4)[None, None, :]).reshape(-1, 8)
+        return self.cable_dof_table
+
+    def node_size(self, nodes: np.ndarray) -> np.ndarray:
+        """Coordinates per node: 2 (stitch), 4 (wire), 6 (messenger hinge at a support)."""
+        ends = np.r_[self.node_dof, self.n_dofs]
+        nodes = np.asarray(nodes)
+        return ends[nodes + 1] - ends[nodes]
 
     def bar_dofs(self) -> np.ndarray:
         """Global indices of the positions (x, z) of both ends of each bar; shape (Eb, 4)."""
@@ -173,9 +186,11 @@ def build_layout(
     )
     node_x = np.array([e[0] for e in entries])
     node_kind = np.array([e[1] for e in entries])
-    sizes = np.where(node_kind == STITCH, 2, 4)
-    node_dof = np.concatenate([[0], np.cumsum(sizes)[:-1]])
     lookup = {(k, round(x, 6)): i for i, (x, k) in enumerate(entries)}
+    hinges = {lookup[(MESSENGER, round(x, 6))] for x in support_x[1:-1]}
+    sizes = np.where(node_kind == STITCH, 2, 4)
+    sizes[list(hinges)] = 6
+    node_dof = np.concatenate([[0], np.cumsum(sizes)[:-1]])
 
     def node(kind: int, x: float) -> int:
         return lookup[(kind, round(x, 6))]
@@ -218,6 +233,12 @@ def build_layout(
                 bar_ea.append(stitch.axial_stiffness)
                 bar_rho.append(stitch.linear_mass)
 
+    # An element's end at a hinge uses the gradient of its own side: (+2, +3) left of it, (+4, +5) right.
+    start = node_dof[cable_nodes]
+    right_side = np.array([4 if a in hinges else 2 for a in cable_nodes[:, 0]])
+    cable_dof_table = np.hstack(
+        [start[:, :1] + [0, 1], (start[:, 0] + right_side)[:, None] + [0, 1], start[:, 1:] + [0, 1, 2, 3]]
+    )
     mw_supports = np.array([node(MESSENGER, x) for x in support_x])
     cw_supports = np.array([node(CONTACT, x) for x in support_x])
     bars = np.array(bar_nodes, dtype=int).reshape(-1, 2)
@@ -259,4 +280,5 @@ def build_layout(
         wire_ends=np.array([[cw_nodes[0], cw_nodes[-1]], [mw_nodes[0], mw_nodes[-1]]]),
         mass_nodes=mass_nodes,
         mass_values=mass_values,
+        cable_dof_table=cable_dof_table,
     )

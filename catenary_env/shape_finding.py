@@ -77,6 +77,21 @@ class StaticSolution:
         n_c = self.layout.cable_nodes.shape[0]
         return self.lengths[n_c + self.layout.dropper_bars]
 
+    @property
+    def wire_tensions(self) -> dict[str, np.ndarray]:
+        """Axial force at the middle of every cable element, N, keyed "contact_wire" / "messenger_wire".
+
+        The horizontal component equals the wire's tension (module docstring); the axial force exceeds it
+        by the slope's share, most on the messenger near the supports.
+        """
+        from .ancf import axial_force
+        from .layout import CONTACT
+
+        lay = self.layout
+        n_c = lay.cable_nodes.shape[0]
+        force = axial_force(self.positions[lay.cable_dofs()], self.lengths[:n_c], lay.cable_axial_stiffness, 0.5)
+        return {"contact_wire": force[lay.cable_wire == CONTACT], "messenger_wire": force[lay.cable_wire != CONTACT]}
+
     def infeasibility(self) -> str:
         """Why the design is statically infeasible, or an empty string (SPEC 3.3)."""
         lengths = self.dropper_lengths
@@ -160,8 +175,12 @@ def initial_guess(layout: Layout) -> tuple[np.ndarray, np.ndarray]:
     for wire_kind, wire in ((CONTACT, c.contact_wire), (MESSENGER, c.messenger_wire)):
         nodes = np.flatnonzero(kind == wire_kind)
         stretch = 1.0 + wire.tension / wire.axial_stiffness
+        slope = stretch * np.gradient(X[xd[nodes] + 1], x[nodes])
         X[xd[nodes] + 2] = stretch
-        X[xd[nodes] + 3] = stretch * np.gradient(X[xd[nodes] + 1], x[nodes])
+        X[xd[nodes] + 3] = slope
+        hinge = layout.node_size(nodes) == 6
+        X[xd[nodes[hinge]] + 4] = stretch
+        X[xd[nodes[hinge]] + 5] = slope[hinge]
     n_c = layout.cable_nodes.shape[0]
     ends = layout.cable_nodes
     chord = np.hypot(X[xd[ends[:, 1]]] - X[xd[ends[:, 0]]], X[xd[ends[:, 1]] + 1] - X[xd[ends[:, 0]] + 1])

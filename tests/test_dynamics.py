@@ -28,7 +28,7 @@ def test_fast_method_equals_the_straightforward_method_with_contact_loss_and_sla
     reference = simulate_passage_reference(system, pantograph, uplift, speed, dt, n_steps=steps)
     fast = simulate_passage(system, pantograph, uplift, speed, dt, n_steps=steps)
     assert reference.slack_steps > 50
-    assert np.sum(reference.contact_force == 0.0) >= 2
+    assert np.sum(reference.contact_force == 0.0) >= 1
     assert reference.unresolved_steps == 0 and fast.unresolved_steps == 0
     assert np.max(np.abs(fast.contact_force - reference.contact_force)) < 1e-6
     assert np.max(np.abs(fast.support_uplift - reference.support_uplift)) < 1e-9
