@@ -2,14 +2,23 @@
 
 Shape-finding, linearisation, factorisation (with the unit dropper responses), the pantograph
 passage and the statistics of the "benchmark" preset at 300 km/h, Δt = 1 ms, on the study mesh.
-Prints the median over several runs of each phase, the real-time factor, the memory peak, and the
-time for several section lengths (the cost must grow linearly with the number of spans).
+Prints the median over several runs of each phase, the real-time factor, the memory peak, the
+time for several section lengths, and the passage's time with the compiled (numba) and the numpy
+backend measured in the same process, on the same prepared system, alternately, with the largest
+difference of their contact forces.
+
+Scaling: a step costs in proportion to the DOFs (the banded solve and the products are linear),
+so the passage's time per step and DOF must stay flat; the passage itself has as many steps as
+the section is long, so its time grows as the square of the number of spans.
 
     python benchmarks/bench_evaluation.py               # 20 spans, 5 runs, spans 10/20/40
     python benchmarks/bench_evaluation.py --runs 3 --spans 20 --json
+    python benchmarks/bench_evaluation.py --backend numpy --numpy-runs 0
 
 Run it on an otherwise idle core (OPENBLAS_NUM_THREADS=1 is set here): timings on shared
-machines are noisy, so quote medians.
+machines are noisy, so quote medians and ratios. The first compiled passage in a process loads
+numba's cached machine code (or compiles it, some ten seconds, on a new machine or band width):
+that is timed apart, as "warm-up".
 """
 
 from __future__ import annotations
@@ -26,6 +35,8 @@ import statistics  # noqa: E402
 import time  # noqa: E402
 import tracemalloc  # noqa: E402
 
+import numpy as np  # noqa: E402
+
 from catenary_env.design import level_design  # noqa: E402
 from catenary_env.dynamics import prepare_passage, simulate_passage  # noqa: E402
 from catenary_env.layout import build_layout  # noqa: E402
@@ -38,14 +49,21 @@ from catenary_env.statistics import contact_statistics  # noqa: E402
 PHASES = ("shape_finding", "linearisation", "factorisation", "passage", "statistics")
 
 
-def one_evaluation(preset: str, n_spans: int, speed_kmh: float, uplift: float, fidelity: Fidelity) -> dict[str, float]:
+def one_evaluation(
+    preset: str, n_spans: int, speed_kmh: float, uplift: float, fidelity: Fidelity, backend: str
+) -> dict[str, float]:
     """Time each phase of one evaluation, s; also returns σ to show the runs agree."""
     catenary = load_catenary(preset)
     pantograph = load_pantograph(catenary.pantograph)
     times: dict[str, float] = {}
     t = time.perf_counter()
-    layout = build_layout(catenary, level_design(catenary), n_spans, fidelity.contact_wire_element,
-                          fidelity.messenger_wire_element)
+    layout = build_layout(
+        catenary,
+        level_design(catenary),
+        n_spans,
+        fidelity.contact_wire_element,
+        fidelity.messenger_wire_element,
+    )
     static = find_shape(layout)
     times["shape_finding"] = time.perf_counter() - t
     t = time.perf_counter()
@@ -55,24 +73,77 @@ def one_evaluation(preset: str, n_spans: int, speed_kmh: float, uplift: float, f
     prepared = prepare_passage(system, fidelity.time_step)
     times["factorisation"] = time.perf_counter() - t
     t = time.perf_counter()
-    trajectory = simulate_passage(system, pantograph, uplift, speed_kmh / 3.6, fidelity.time_step, prepared=prepared)
+    trajectory = simulate_passage(
+        system, pantograph, uplift, speed_kmh / 3.6, fidelity.time_step, prepared=prepared, backend=backend
+    )
     times["passage"] = time.perf_counter() - t
     t = time.perf_counter()
     window = analysis_window(catenary, Fidelity(n_spans=n_spans, analysis_spans=max(1, n_spans // 2)))
-    stats = contact_statistics(trajectory.position, trajectory.contact_force, fidelity.time_step, window,
-                               trajectory.support_x, trajectory.support_uplift)
+    stats = contact_statistics(
+        trajectory.position,
+        trajectory.contact_force,
+        fidelity.time_step,
+        window,
+        trajectory.support_x,
+        trajectory.support_uplift,
+    )
     times["statistics"] = time.perf_counter() - t
     times["total"] = sum(times[p] for p in PHASES)
     times["simulated_time"] = float(trajectory.time[-1])
+    times["steps"] = trajectory.time.size
     times["n_dofs"] = system.n_dofs
     times["sigma"] = stats.std
     return times
 
 
-def memory_peak(preset: str, n_spans: int, speed_kmh: float, uplift: float, fidelity: Fidelity) -> float:
+def backend_comparison(
+    preset: str, n_spans: int, speed_kmh: float, uplift: float, fidelity: Fidelity, runs: int
+) -> dict[str, float]:
+    """Passage times of both backends on one prepared system, alternately; medians and their ratio."""
+    catenary = load_catenary(preset)
+    pantograph = load_pantograph(catenary.pantograph)
+    layout = build_layout(
+        catenary,
+        level_design(catenary),
+        n_spans,
+        fidelity.contact_wire_element,
+        fidelity.messenger_wire_element,
+    )
+    system = linearise(find_shape(layout))
+    prepared = prepare_passage(system, fidelity.time_step)
+    times: dict[str, list[float]] = {"numba": [], "numpy": []}
+    forces = {}
+    for _ in range(runs):
+        for backend in times:
+            t = time.perf_counter()
+            trajectory = simulate_passage(
+                system,
+                pantograph,
+                uplift,
+                speed_kmh / 3.6,
+                fidelity.time_step,
+                prepared=prepared,
+                backend=backend,
+            )
+            times[backend].append(time.perf_counter() - t)
+            forces[backend] = trajectory.contact_force
+    numba, numpy = statistics.median(times["numba"]), statistics.median(times["numpy"])
+    return {
+        "runs": runs,
+        "numba_passage_median_s": numba,
+        "numpy_passage_median_s": numpy,
+        "numba_over_numpy": numba / numpy,
+        "speed_up": numpy / numba,
+        "max_contact_force_difference_n": float(np.max(np.abs(forces["numba"] - forces["numpy"]))),
+    }
+
+
+def memory_peak(
+    preset: str, n_spans: int, speed_kmh: float, uplift: float, fidelity: Fidelity, backend: str
+) -> float:
     """Peak of memory allocated by Python and numpy during one evaluation, MiB (an untimed run)."""
     tracemalloc.start()
-    one_evaluation(preset, n_spans, speed_kmh, uplift, fidelity)
+    one_evaluation(preset, n_spans, speed_kmh, uplift, fidelity, backend)
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     return peak / 2**20
@@ -82,49 +153,116 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--preset", default="benchmark", help="catenary preset (default: benchmark)")
     parser.add_argument("--speed", type=float, default=300.0, help="train speed, km/h (default 300)")
-    parser.add_argument("--uplift", type=float, default=170.0,
-                        help="pantograph uplift force, N (default 170: the EN 50367 mean at 300 km/h)")
+    parser.add_argument(
+        "--uplift",
+        type=float,
+        default=170.0,
+        help="pantograph uplift force, N (default 170: the EN 50367 mean at 300 km/h)",
+    )
     parser.add_argument("--runs", type=int, default=5, help="timed runs per section length (default 5)")
     parser.add_argument("--spans", type=int, nargs="+", default=[10, 20, 40], help="section lengths, spans")
-    parser.add_argument("--main-spans", type=int, default=20, help="section of the headline figures (default 20)")
+    parser.add_argument(
+        "--main-spans", type=int, default=20, help="section of the headline figures (default 20)"
+    )
+    parser.add_argument(
+        "--backend", default="auto", choices=("auto", "numba", "numpy"), help="passage backend (default auto)"
+    )
+    parser.add_argument(
+        "--numpy-runs",
+        type=int,
+        default=1,
+        help="passages per backend in the numba / numpy comparison on the main section (default 1; 0: none)",
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON summary")
     args = parser.parse_args()
     fidelity = Fidelity()  # the study mesh: 0.5 m / 1.0 m elements, 1 ms
     spans = sorted(set(args.spans) | {args.main_spans})
 
-    one_evaluation(args.preset, 3, args.speed, args.uplift, fidelity)  # warm-up (imports, caches)
+    t = time.perf_counter()
+    one_evaluation(args.preset, 3, args.speed, args.uplift, fidelity, args.backend)  # imports, numba cache
+    warm_up = time.perf_counter() - t
     results = {}
     for n in spans:
-        runs = [one_evaluation(args.preset, n, args.speed, args.uplift, fidelity) for _ in range(args.runs)]
+        runs = [
+            one_evaluation(args.preset, n, args.speed, args.uplift, fidelity, args.backend)
+            for _ in range(args.runs)
+        ]
         med = {key: statistics.median(r[key] for r in runs) for key in runs[0]}
         med["min_total"] = min(r["total"] for r in runs)
         med["max_total"] = max(r["total"] for r in runs)
         med["real_time_factor"] = med["total"] / med["simulated_time"]
+        med["passage_per_step_us"] = 1e6 * med["passage"] / (med["steps"] - 1)
+        med["passage_per_step_dof_ns"] = 1e3 * med["passage_per_step_us"] / med["n_dofs"]
         results[n] = med
         if not args.json:
-            print(f"{n:3d} spans: {med['n_dofs']:.0f} DOFs, median {med['total']:.2f} s "
-                  f"(min {med['min_total']:.2f}, max {med['max_total']:.2f}) over {args.runs} runs, "
-                  f"real-time factor {med['real_time_factor']:.2f}, σ = {med['sigma']:.3f} N", flush=True)
+            print(
+                f"{n:3d} spans: {med['n_dofs']:.0f} DOFs, median {med['total']:.2f} s "
+                f"(min {med['min_total']:.2f}, max {med['max_total']:.2f}) over {args.runs} runs, "
+                f"passage {med['passage']:.2f} s ({med['passage_per_step_us']:.0f} µs/step), "
+                f"real-time factor {med['real_time_factor']:.2f}, σ = {med['sigma']:.3f} N",
+                flush=True,
+            )
     main = results[args.main_spans]
-    peak = memory_peak(args.preset, args.main_spans, args.speed, args.uplift, fidelity)
+    comparison = None
+    if args.numpy_runs > 0:
+        comparison = backend_comparison(
+            args.preset, args.main_spans, args.speed, args.uplift, fidelity, args.numpy_runs
+        )
+    peak = memory_peak(args.preset, args.main_spans, args.speed, args.uplift, fidelity, args.backend)
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     per_span = {n: results[n]["total"] / n for n in spans}
     summary = {
-        "preset": args.preset, "speed_kmh": args.speed, "runs": args.runs, "main_spans": args.main_spans,
-        "phases_median_s": {p: main[p] for p in PHASES}, "total_median_s": main["total"],
-        "real_time_factor": main["real_time_factor"], "simulated_time_s": main["simulated_time"],
-        "n_dofs": main["n_dofs"], "memory_peak_traced_mib": peak, "process_max_rss_mib": rss,
-        "scaling": {str(n): {"total_median_s": results[n]["total"], "per_span_s": per_span[n]} for n in spans},
+        "preset": args.preset,
+        "speed_kmh": args.speed,
+        "backend": args.backend,
+        "runs": args.runs,
+        "main_spans": args.main_spans,
+        "warm_up_s": warm_up,
+        "phases_median_s": {p: main[p] for p in PHASES},
+        "total_median_s": main["total"],
+        "passage_per_step_us": main["passage_per_step_us"],
+        "real_time_factor": main["real_time_factor"],
+        "simulated_time_s": main["simulated_time"],
+        "n_dofs": main["n_dofs"],
+        "memory_peak_traced_mib": peak,
+        "process_max_rss_mib": rss,
+        "scaling": {
+            str(n): {
+                "total_median_s": results[n]["total"],
+                "passage_median_s": results[n]["passage"],
+                "per_span_s": per_span[n],
+                "passage_per_step_us": results[n]["passage_per_step_us"],
+                "passage_per_step_dof_ns": results[n]["passage_per_step_dof_ns"],
+            }
+            for n in spans
+        },
+        "backends": comparison,
     }
     if args.json:
         print(json.dumps(summary, indent=2))
-    else:
-        print(f"\n{args.main_spans} spans at {args.speed:g} km/h ({main['simulated_time']:.1f} s simulated), medians:")
-        for p in PHASES:
-            print(f"  {p:<14} {main[p]:8.3f} s  ({100 * main[p] / main['total']:4.1f} %)")
-        print(f"  {'total':<14} {main['total']:8.3f} s, real-time factor {main['real_time_factor']:.2f}")
-        print(f"memory: traced peak {peak:.0f} MiB, process max RSS {rss:.0f} MiB")
-        print("scaling (time per span, s): " + ", ".join(f"{n}: {per_span[n]:.3f}" for n in spans))
+        return 0
+    print(
+        f"\n{args.main_spans} spans at {args.speed:g} km/h ({main['simulated_time']:.1f} s simulated), "
+        f"backend {args.backend}, medians:"
+    )
+    for p in PHASES:
+        print(f"  {p:<14} {main[p]:8.3f} s  ({100 * main[p] / main['total']:4.1f} %)")
+    print(f"  {'total':<14} {main['total']:8.3f} s, real-time factor {main['real_time_factor']:.2f}")
+    print(f"warm-up (imports, numba cache or compilation, 3 spans): {warm_up:.1f} s")
+    print(f"memory: traced peak {peak:.0f} MiB, process max RSS {rss:.0f} MiB")
+    print("scaling (time per span, s): " + ", ".join(f"{n}: {per_span[n]:.3f}" for n in spans))
+    print(
+        "scaling (passage per step and DOF, ns): "
+        + ", ".join(f"{n}: {results[n]['passage_per_step_dof_ns']:.1f}" for n in spans)
+    )
+    if comparison is not None:
+        print(
+            f"passage, {args.main_spans} spans, {comparison['runs']} run(s) each, alternately: "
+            f"numba {comparison['numba_passage_median_s']:.2f} s, "
+            f"numpy {comparison['numpy_passage_median_s']:.2f} s, "
+            f"numba / numpy = {comparison['numba_over_numpy']:.3f} ({comparison['speed_up']:.1f}x), "
+            f"max |ΔF| = {comparison['max_contact_force_difference_n']:.1e} N"
+        )
     return 0
 
 

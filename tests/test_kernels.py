@@ -1,0 +1,146 @@
+"""The compiled passage (catenary_env._kernels) against the numpy backend (SPEC 3.6, 9).
+
+The two backends run the same method with the same arithmetic up to the order of sums, so they
+must agree to rounding: the contact force to 1e-8 N, through contact losses and slack droppers.
+numba compiles each kernel once per band width (some ten seconds) and caches it on disk.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.linalg as sla
+
+from catenary_env import dynamics
+from catenary_env.design import level_design
+from catenary_env.dynamics import prepare_passage, simulate_passage
+from catenary_env.layout import build_layout
+from catenary_env.linear_system import linearise
+from catenary_env.presets import load_catenary, load_pantograph
+from catenary_env.shape_finding import find_shape
+
+
+@pytest.fixture(scope="module")
+def kernels():
+    return pytest.importorskip("catenary_env._kernels", reason="the compiled backend needs numba")
+
+
+def _system(preset: str):
+    catenary = load_catenary(preset)
+    system = linearise(find_shape(build_layout(catenary, level_design(catenary), 3, 2.0, 4.0)))
+    return system, load_pantograph(catenary.pantograph)
+
+
+@pytest.fixture(scope="module")
+def en50318():
+    return _system("en50318-2002")
+
+
+def _assert_same(fast, reference):
+    assert fast.slack_steps == reference.slack_steps
+    assert fast.unresolved_steps == reference.unresolved_steps == 0
+    np.testing.assert_array_equal(fast.contact_force == 0.0, reference.contact_force == 0.0)
+    assert np.max(np.abs(fast.contact_force - reference.contact_force)) < 1e-8
+    for name in ("head_height", "wire_uplift", "support_uplift"):
+        assert np.max(np.abs(getattr(fast, name) - getattr(reference, name))) < 1e-12, name
+    assert np.max(np.abs(fast.dropper_force_min - reference.dropper_force_min)) < 1e-8
+    assert np.max(np.abs(fast.dropper_force_max - reference.dropper_force_max)) < 1e-8
+
+
+def test_compiled_passage_equals_the_numpy_backend_with_contact_loss_and_slack_droppers(kernels, en50318):
+    system, pantograph = en50318
+    # As the oracle test: at 350 km/h and 200 N droppers go slack and the head leaves the wire.
+    speed, dt, uplift, steps = 350 / 3.6, 2e-3, 200.0, 520
+    prepared = prepare_passage(system, dt)
+    args = (system, pantograph, uplift, speed, dt, steps)
+    reference = simulate_passage(*args, prepared=prepared, backend="numpy")
+    fast = simulate_passage(*args, prepared=prepared, backend="numba")
+    assert reference.slack_steps > 50
+    assert np.sum(reference.contact_force == 0.0) >= 1
+    _assert_same(fast, reference)
+
+
+def test_compiled_passage_in_the_reverse_cuthill_mckee_order(kernels):
+    # The stitched catenary's band is narrower after reordering: the loop then works in that order.
+    system, pantograph = _system("stitched")
+    speed, dt, uplift, steps = 300 / 3.6, 2e-3, 200.0, 300
+    prepared = prepare_passage(system, dt)
+    assert prepared.factor.perm is not None
+    args = (system, pantograph, uplift, speed, dt, steps)
+    reference = simulate_passage(*args, prepared=prepared, backend="numpy")
+    fast = simulate_passage(*args, prepared=prepared, backend="numba")
+    assert reference.slack_steps > 0
+    _assert_same(fast, reference)
+
+
+def test_progress_reports_do_not_change_the_compiled_passage(kernels, en50318):
+    # With progress the loop runs in a hundred calls, each picking the state up where the last left it.
+    system, pantograph = en50318
+    prepared = prepare_passage(system, 2e-3)
+    args = (system, pantograph, 200.0, 350 / 3.6, 2e-3, 400)
+    fractions: list[float] = []
+    chunked = simulate_passage(*args, progress=fractions.append, prepared=prepared, backend="numba")
+    whole = simulate_passage(*args, prepared=prepared, backend="numba")
+    assert len(fractions) > 50 and fractions[-1] == 1.0 and np.all(np.diff(fractions) > 0)
+    np.testing.assert_array_equal(chunked.contact_force, whole.contact_force)
+    np.testing.assert_array_equal(chunked.support_uplift, whole.support_uplift)
+
+
+def test_an_unknown_backend_is_refused(en50318):
+    system, pantograph = en50318
+    with pytest.raises(ValueError, match="backend"):
+        simulate_passage(system, pantograph, 150.0, 80.0, 2e-3, 10, backend="cuda")
+
+
+def test_without_numba_auto_falls_back_to_numpy_and_numba_says_how_to_install(en50318, monkeypatch):
+    system, pantograph = en50318
+    args = (system, pantograph, 150.0, 80.0, 2e-3, 20)
+    reference = simulate_passage(*args, backend="numpy")
+    monkeypatch.setattr(dynamics, "_compiled_kernels", lambda: None)
+    np.testing.assert_array_equal(simulate_passage(*args).contact_force, reference.contact_force)
+    with pytest.raises(ImportError, match="pip install numba"):
+        simulate_passage(*args, backend="numba")
+
+
+def test_banded_substitution_and_product_equal_scipy(kernels, en50318):
+    system, _ = en50318
+    prepared = prepare_passage(system, 2e-3)
+    factor = prepared.factor
+    w = kernels.padded_width(factor.bandwidth)
+    rows, inv_diag = kernels.factor_rows(factor.factor, w)
+    rng = np.random.default_rng(1)
+    n = system.n_dofs
+    rhs = rng.standard_normal(n)
+    b = np.zeros(n + w)
+    b[:n] = rhs
+    kernels.substitute(rows, inv_diag, b, (0,) * w)
+    exact = sla.cho_solve_banded((factor.factor, False), rhs)
+    assert np.max(np.abs(b[:n] - exact)) < 1e-12 * np.max(np.abs(exact))
+    assert np.all(b[n:] == 0.0)
+
+    x, y = rng.standard_normal(n), rng.standard_normal(n)
+    out = np.zeros(n + w)
+    kernels.symmetric_product(*kernels.upper_pair(system.mass, system.stiffness), x, y, out, (0,) * w)
+    exact = system.mass @ x + system.stiffness @ y
+    assert np.max(np.abs(out[:n] - exact)) < 1e-12 * np.max(np.abs(exact))
+
+
+def test_unit_responses_are_the_full_solve_where_they_are_kept(kernels):
+    # Ten spans, so that a mid-section element's responses fall below 1e-30 of their peak on both sides.
+    catenary = load_catenary("benchmark")
+    system = linearise(find_shape(build_layout(catenary, level_design(catenary), 10, 2.0, 4.0)))
+    factor = prepare_passage(system, 1e-3).factor
+    w = kernels.padded_width(factor.bandwidth)
+    rows, inv_diag = kernels.factor_rows(factor.factor, w)
+    n = system.n_dofs
+    dofs = system.contact_wire.z_dofs[len(system.contact_wire.z_dofs) // 2]
+    unit = np.zeros((n + w, 4))
+    first, last = kernels.unit_responses(rows, inv_diag, unit, dofs, (0,) * w)
+    exact = np.zeros((n, 4))
+    exact[dofs, np.arange(4)] = 1.0
+    exact = factor.solve(exact)
+    assert 0 < first < dofs.min() and dofs.max() < last < n - 1
+    assert np.max(np.abs(unit[:n] - exact)) < 1e-12 * np.max(np.abs(exact))
+    assert np.all(unit[:first] == 0.0) and np.all(unit[last + 1 :] == 0.0)
+    left_out = np.r_[exact[:first], exact[last + 1 :]]
+    assert np.max(np.abs(left_out)) < 1e-25 * np.max(np.abs(exact))
