@@ -44,7 +44,7 @@ from catenary_env.linear_system import linearise  # noqa: E402
 from catenary_env.presets import load_catenary, load_pantograph  # noqa: E402
 from catenary_env.shape_finding import find_shape  # noqa: E402
 from catenary_env.simulation import Fidelity, analysis_window  # noqa: E402
-from catenary_env.statistics import contact_statistics  # noqa: E402
+from catenary_env.statistics import passage_statistics  # noqa: E402
 
 PHASES = ("shape_finding", "linearisation", "factorisation", "passage", "statistics")
 
@@ -79,14 +79,7 @@ def one_evaluation(
     times["passage"] = time.perf_counter() - t
     t = time.perf_counter()
     window = analysis_window(catenary, Fidelity(n_spans=n_spans, analysis_spans=max(1, n_spans // 2)))
-    stats = contact_statistics(
-        trajectory.position,
-        trajectory.contact_force,
-        fidelity.time_step,
-        window,
-        trajectory.support_x,
-        trajectory.support_uplift,
-    )
+    stats = passage_statistics(trajectory, window)
     times["statistics"] = time.perf_counter() - t
     times["total"] = sum(times[p] for p in PHASES)
     times["simulated_time"] = float(trajectory.time[-1])

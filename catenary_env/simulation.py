@@ -22,8 +22,7 @@ from .layout import build_layout
 from .linear_system import LinearSystem, linearise
 from .newmark import Trajectory
 from .shape_finding import ShapeFindingError, StaticSolution, find_shape
-from .statistics import ContactStatistics, contact_statistics, lowpass
-
+from .statistics import ContactStatistics, lowpass, passage_statistics
 
 PHYSICS_REVISION = 1
 """Raised whenever a change of the simulator changes its results, so that stored results of older
@@ -217,14 +216,7 @@ def simulate_static(
         system, pantograph, uplift_force, speed, fidelity.time_step, progress=progress, prepared=prepared
     )
     window = analysis_window(catenary, fidelity)
-    stats = contact_statistics(
-        trajectory.position,
-        trajectory.contact_force,
-        fidelity.time_step,
-        window,
-        trajectory.support_x,
-        trajectory.support_uplift,
-    )
+    stats = passage_statistics(trajectory, window)
     return Simulation(static, system, trajectory, stats, window, uplift_force)
 
 

@@ -8,9 +8,13 @@ the central spans of the section, so that the entry and exit transients do not c
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import signal
+
+if TYPE_CHECKING:
+    from .newmark import Trajectory
 
 CUTOFF_HZ = 20.0
 """Low-pass cut-off of the contact force, Hz (EN 50318:2002; EN 50367)."""
@@ -120,4 +124,12 @@ def contact_statistics(
         actual_min=float(np.min(f)),
         contact_loss_percent=100.0 * float(np.mean(force[inside] <= 0.0)),
         max_support_uplift=uplift,
+    )
+
+
+def passage_statistics(trajectory: Trajectory, window: tuple[float, float]) -> ContactStatistics:
+    """:func:`contact_statistics` of a pantograph passage over the analysis window (m)."""
+    tr = trajectory
+    return contact_statistics(
+        tr.position, tr.contact_force, tr.time[1] - tr.time[0], window, tr.support_x, tr.support_uplift
     )
