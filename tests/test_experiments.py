@@ -1,0 +1,69 @@
+"""Studies re-plot from their data files alone (SPEC 7): no simulation in ``report``."""
+
+from __future__ import annotations
+
+from experiments import convergence, presag, validation
+from experiments.common import write_csv
+
+
+def test_validation_report_reads_only_its_csv(tmp_path):
+    rows = [
+        {
+            "speed_kmh": 300.0,
+            "quantity": q,
+            "value": v,
+            "low": lo,
+            "high": hi,
+            "passed": int(lo <= v <= hi),
+            "margin": max(lo - v, v - hi, 0.0),
+        }
+        for q, v, lo, hi in [
+            ("mean", 113.1, 110, 120),
+            ("std", 31.0, 32, 40),
+            ("max_support_uplift", 0.056, 0.055, 0.065),
+        ]
+    ]
+    write_csv(tmp_path / "en50318.csv", rows)
+    table = validation.report(tmp_path)
+    assert "FAIL (by 1.00 N)" in table and "56.00 mm" in table
+    assert (tmp_path / "en50318.png").stat().st_size > 0
+
+
+def test_convergence_report_reads_only_its_csv(tmp_path):
+    rows = [
+        {
+            "n_spans": 5,
+            "contact_wire_element_m": h,
+            "messenger_wire_element_m": 2 * h,
+            "time_step_s": dt,
+            "n_dofs": 100,
+            "sigma_N": s,
+            "mean_N": 157.0,
+            "actual_max_N": 250.0,
+            "wall_time_s": 1.0,
+            "change_vs_finest_percent": 100 * (s - 40.0) / 40.0,
+        }
+        for h, dt, s in [(0.5, 1e-3, 40.2), (0.25, 5e-4, 40.0)]
+    ]
+    write_csv(tmp_path / "convergence.csv", rows)
+    assert "+0.50" in convergence.report(tmp_path)
+
+
+def test_presag_report_finds_the_best_feasible_presag(tmp_path):
+    rows = [
+        {
+            "problem": "BPresag",
+            "catenary": "benchmark",
+            "speed_kmh": 300.0,
+            "presag_m": s,
+            "feasible": f,
+            "sigma_N": sigma,
+            "mean_N": 157.0,
+            "uplift_N": 170.0,
+            "reason": "",
+        }
+        for s, f, sigma in [(0.0, 1, 40.0), (0.02, 1, 35.0), (0.04, 0, 30.0)]
+    ]
+    write_csv(tmp_path / "presag.csv", rows)
+    table = presag.report(tmp_path)
+    assert "| BPresag | 300 | 0.02 | 35.00 | 40.00 | 12.5 |" in table
