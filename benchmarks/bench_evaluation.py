@@ -14,6 +14,7 @@ the section is long, so its time grows as the square of the number of spans.
     python benchmarks/bench_evaluation.py               # 20 spans, 5 runs, spans 10/20/40
     python benchmarks/bench_evaluation.py --runs 3 --spans 20 --json
     python benchmarks/bench_evaluation.py --backend numpy --numpy-runs 0
+    python benchmarks/bench_evaluation.py --runs 1 --spans 20 --batch 8   # + a generation's throughput
 
 Run it on an otherwise idle core (OPENBLAS_NUM_THREADS=1 is set here): timings on shared
 machines are noisy, so quote medians and ratios. The first compiled passage in a process loads
@@ -34,16 +35,17 @@ import resource  # noqa: E402
 import statistics  # noqa: E402
 import time  # noqa: E402
 import tracemalloc  # noqa: E402
+from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from catenary_env.design import level_design  # noqa: E402
+from catenary_env.design import level_design, presag_design  # noqa: E402
 from catenary_env.dynamics import prepare_passage, simulate_passage  # noqa: E402
 from catenary_env.layout import build_layout  # noqa: E402
 from catenary_env.linear_system import linearise  # noqa: E402
 from catenary_env.presets import load_catenary, load_pantograph  # noqa: E402
 from catenary_env.shape_finding import find_shape  # noqa: E402
-from catenary_env.simulation import Fidelity, analysis_window  # noqa: E402
+from catenary_env.simulation import Fidelity, analysis_window, evaluate  # noqa: E402
 from catenary_env.statistics import passage_statistics  # noqa: E402
 
 PHASES = ("shape_finding", "linearisation", "factorisation", "passage", "statistics")
@@ -131,6 +133,66 @@ def backend_comparison(
     }
 
 
+def _evaluate_presag(
+    preset: str, presag: float, speed_kmh: float, uplift: float, fidelity: Fidelity
+) -> float:
+    """σ of one pre-sag design (a process-pool task: module level, so that it pickles)."""
+    catenary = load_catenary(preset)
+    evaluation = evaluate(
+        catenary,
+        load_pantograph(catenary.pantograph),
+        presag_design(catenary, presag),
+        speed_kmh / 3.6,
+        fidelity,
+        uplift_force=uplift,
+    )
+    return evaluation.statistics.std if evaluation.statistics is not None else float("nan")
+
+
+def batch_throughput(
+    preset: str, size: int, workers: list[int], speed_kmh: float, uplift: float, fidelity: Fidelity
+) -> dict[str, dict[str, float]]:
+    """Evaluations per minute of a generation of ``size`` pre-sag designs (0 to 100 mm), per pool size.
+
+    Each pool is started and warmed (imports, numba cache) before the clock starts, as an
+    optimiser's pool is; designs are then evaluated one per task, as the optimisers do.
+    """
+    presags = np.linspace(0.0, 0.1, size)
+    out = {}
+    for n_workers in workers:
+        with ProcessPoolExecutor(n_workers) as pool:
+            small = Fidelity(n_spans=3, analysis_spans=1)
+            list(
+                pool.map(
+                    _evaluate_presag,
+                    [preset] * n_workers,
+                    [0.0] * n_workers,
+                    [speed_kmh] * n_workers,
+                    [uplift] * n_workers,
+                    [small] * n_workers,
+                )
+            )
+            t = time.perf_counter()
+            sigmas = list(
+                pool.map(
+                    _evaluate_presag,
+                    [preset] * size,
+                    presags,
+                    [speed_kmh] * size,
+                    [uplift] * size,
+                    [fidelity] * size,
+                )
+            )
+            wall = time.perf_counter() - t
+        out[str(n_workers)] = {
+            "wall_s": wall,
+            "evaluations_per_minute": 60.0 * size / wall,
+            "per_worker_per_minute": 60.0 * size / wall / n_workers,
+            "sigma_first_last": [sigmas[0], sigmas[-1]],
+        }
+    return out
+
+
 def memory_peak(
     preset: str, n_spans: int, speed_kmh: float, uplift: float, fidelity: Fidelity, backend: str
 ) -> float:
@@ -165,6 +227,19 @@ def main() -> int:
         type=int,
         default=1,
         help="passages per backend in the numba / numpy comparison on the main section (default 1; 0: none)",
+    )
+    parser.add_argument(
+        "--batch",
+        type=int,
+        default=0,
+        help="designs in a generation for the batch throughput, on the main section (default 0: none)",
+    )
+    parser.add_argument(
+        "--workers",
+        type=int,
+        nargs="+",
+        default=[1, os.cpu_count() or 1],
+        help="process-pool sizes for the batch throughput (default: 1 and the CPU count)",
     )
     parser.add_argument("--json", action="store_true", help="print one JSON summary")
     args = parser.parse_args()
@@ -201,6 +276,12 @@ def main() -> int:
         comparison = backend_comparison(
             args.preset, args.main_spans, args.speed, args.uplift, fidelity, args.numpy_runs
         )
+    batch = None
+    if args.batch > 0:
+        batch_fidelity = Fidelity(n_spans=args.main_spans, analysis_spans=max(1, args.main_spans // 2))
+        batch = batch_throughput(
+            args.preset, args.batch, sorted(set(args.workers)), args.speed, args.uplift, batch_fidelity
+        )
     peak = memory_peak(args.preset, args.main_spans, args.speed, args.uplift, fidelity, args.backend)
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     per_span = {n: results[n]["total"] / n for n in spans}
@@ -230,6 +311,7 @@ def main() -> int:
             for n in spans
         },
         "backends": comparison,
+        "batch": batch,
     }
     if args.json:
         print(json.dumps(summary, indent=2))
@@ -255,6 +337,12 @@ def main() -> int:
             f"numpy {comparison['numpy_passage_median_s']:.2f} s, "
             f"numba / numpy = {comparison['numba_over_numpy']:.3f} ({comparison['speed_up']:.1f}x), "
             f"max |ΔF| = {comparison['max_contact_force_difference_n']:.1e} N"
+        )
+    for n_workers, b in (batch or {}).items():
+        print(
+            f"batch of {args.batch} designs, {args.main_spans} spans, {n_workers} worker(s): "
+            f"{b['wall_s']:.1f} s, {b['evaluations_per_minute']:.1f} evaluations/min, "
+            f"{b['per_worker_per_minute']:.1f} per worker"
         )
     return 0
 

@@ -4,17 +4,24 @@ The same method as the numpy backend of :func:`catenary_env.dynamics.simulate_pa
 step: superposition of unit responses, one small contact / slack-dropper problem per step solved by
 the same active-set iteration, so the two backends agree to rounding (about 1e-9 N on the contact
 force). One compiled loop replaces a dozen numpy and LAPACK calls per step; the per-step work is
-then one product M x + K y, one banded solve with K̂'s factor and one Newmark update, each a single
+then one product with M, one banded solve with K̂'s factor and one Newmark update, each a single
 pass over the DOFs. What the profile asked for, beyond compiling:
 
-- The factor is stored by rows, ``rows[i, m] = U[i, i + m]``, with w zero rows appended so that
-  every row has the full band width w. w is a compile-time constant, the length of the tuple
-  ``width`` (one compiled version per band width, rounded up to WIDTH_STEP): LLVM unrolls the
-  substitutions, which halves their time. The forward substitution carries the next unknown in a
-  register and the backward one sums each row in four parts: both shorten the chain of dependent
-  operations from one row to the next (a triangular solve is latency-bound).
-- M x + K y is taken from the upper triangles of M and K on one pattern, column offsets in one byte
-  (:func:`upper_pair`): half the bytes of two CSR matrices.
+- No product with K: with Rayleigh damping K̂ = c_k K + c_m M (c_k = 1 + β a1, c_m = a0 + α a1),
+  so K y = (K̂ y - c_m M y) / c_k and the Newmark right-hand side M x + K y gives
+
+      u_known = K̂⁻¹ M (x - (c_m / c_k) y) + y / c_k,
+
+  one product with the (sparser, constant) mass matrix per step instead of one with M and K.
+- The factor is stored with a unit diagonal, K̂ = Ûᵀ D² Û: the forward sweep Ûᵀ z = b and the
+  backward sweep Û x = D⁻² z need no division. Each sweep is a row-by-row dot product with the
+  w unknowns found last, which are summed oldest first and the newest four kept in registers, so
+  the chain of dependent operations from one row to the next is a single FMA (a triangular solve
+  is latency-bound; summing the newest first, or letting LLVM reassociate, makes it 16 FMAs). The
+  forward sweep reads a second copy of Û by columns, stored in reverse row order so that every
+  index is the row plus a positive offset (numba tests a signed index for wrap-around, which
+  costs as much as the arithmetic). w is a compile-time constant, the length of the tuple
+  ``width`` (one compiled version per band width, rounded up to WIDTH_STEP): LLVM unrolls the sums.
 - A unit force's response K̂⁻¹ e decays away from the force (K̂ is dominated by M / (β Δt²)):
   below 1e-30 of its peak within some 1,500 to 3,000 DOFs on the study mesh (the axial waves decay
   slowest), a fifth of the 20-span section. The contact element's unit responses are computed,
@@ -33,7 +40,7 @@ from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
-from numba import njit
+from numba import njit, uint64
 
 MAX_ACTIVE_SET_ITERATIONS = 40  # as catenary_env.dynamics (imported from there would be circular)
 FULL_SWITCH_ITERATIONS = 8
@@ -46,12 +53,10 @@ class PassageArrays(NamedTuple):
 
     Attributes
     ----------
-    rows : ndarray (n + w, w + 1)
-        Cholesky factor of K̂ by rows, rows[i, m] = U[i, i + m], zero-padded.
-    inv_diag : ndarray (n + w,)
-        1 / U[i, i] (zero in the padding).
-    mk_ptr, mk_offset, mk_values :
-        Upper triangles of M and K by rows (:func:`upper_pair`).
+    upper, lower, scale :
+        K̂ = Ûᵀ D² Û by rows and by columns, and D⁻² (:func:`unit_factor`).
+    m_ptr, m_offset, m_values :
+        Upper triangle of M by rows (:func:`upper_rows`).
     b_ptr, b_index, b_values :
         CSR of the dropper elongation matrix B (D, n).
     dropper_response_t : ndarray (D, n)
@@ -77,14 +82,17 @@ class PassageArrays(NamedTuple):
     load_p : ndarray (p,)
         Uplift force vector.
     coefficients : ndarray (16,)
-        c1, c2, c3, d1, d2, d3, a0, a1, a2, a3, a4, a5, k_h, Rayleigh β, 0, 0.
+        e1, e2, e3, g1, g2, g3, a0, a1, a2, a3, a4, a5, k_h, Rayleigh β, 0, 0: the step's
+        right-hand side is M (e1 u + e2 v + e3 a) and y / c_k = g1 u + g2 v + g3 a
+        (:func:`step_coefficients`).
     """
 
-    rows: np.ndarray
-    inv_diag: np.ndarray
-    mk_ptr: np.ndarray
-    mk_offset: np.ndarray
-    mk_values: np.ndarray
+    upper: np.ndarray
+    lower: np.ndarray
+    scale: np.ndarray
+    m_ptr: np.ndarray
+    m_offset: np.ndarray
+    m_values: np.ndarray
     b_ptr: np.ndarray
     b_index: np.ndarray
     b_values: np.ndarray
@@ -115,9 +123,11 @@ class PassageState(NamedTuple):
     u, v, a : ndarray (n,)
         Catenary displacement, velocity, acceleration.
     x, y : ndarray (n,)
-        The next right-hand side is M x + K y.
+        The next step's u_known is K̂⁻¹ M x + y (PassageArrays.coefficients).
     work : ndarray (n + w,)
-        Right-hand side, then u_known, then u₁.
+        Right-hand side M x, then K̂⁻¹ M x, then u₁ - y.
+    sweep : ndarray (n + w,)
+        The forward sweep's unknowns, in reverse order.
     unit : ndarray (n + w, 4)
         Unit responses of the current contact-wire element, non-zero in rows flags[4]..flags[5].
     y_p, yd_p, ydd_p : ndarray (p,)
@@ -136,6 +146,7 @@ class PassageState(NamedTuple):
     x: np.ndarray
     y: np.ndarray
     work: np.ndarray
+    sweep: np.ndarray
     unit: np.ndarray
     y_p: np.ndarray
     yd_p: np.ndarray
@@ -155,19 +166,38 @@ def padded_width(bandwidth: int) -> int:
     return -(-bandwidth // WIDTH_STEP) * WIDTH_STEP
 
 
-def factor_rows(ab: np.ndarray, width: int) -> tuple[np.ndarray, np.ndarray]:
-    """Upper band storage of scipy (``ab[b + i - j, j] = U[i, j]``) to rows of ``width`` + 1 and 1 / diagonal.
+class UnitFactor(NamedTuple):
+    """K̂ = Uᵀ U = Ûᵀ D² Û with Û unit upper triangular, for the sweeps of :func:`solve`. Band width w.
 
-    ``rows[i, m] = U[i, i + m]``, zero beyond the band b <= width and in the w appended rows.
+    Attributes
+    ----------
+    upper : ndarray (n + w, w)
+        Û by rows, ``upper[i, m - 1] = Û[i, i + m]`` for m = 1..w, zero outside the matrix.
+    lower : ndarray (n + w, w)
+        Û by columns in reverse order, ``lower[n - 1 - j, m - 1] = Û[j - m, j]``, zero outside.
+    scale : ndarray (n + w,)
+        D⁻² = 1 / U[i, i]², zero in the padding.
     """
+
+    upper: np.ndarray
+    lower: np.ndarray
+    scale: np.ndarray
+
+
+def unit_factor(ab: np.ndarray, width: int) -> UnitFactor:
+    """:class:`UnitFactor` of scipy's upper band storage of U (``ab[b + i - j, j] = U[i, j]``, b <= width)."""
     b, n = ab.shape[0] - 1, ab.shape[1]
     w = width
-    rows = np.zeros((n + w, w + 1))
-    for m in range(b + 1):
-        rows[: n - m, m] = ab[b - m, m:]
-    inv_diag = np.zeros(n + w)
-    inv_diag[:n] = 1.0 / rows[:n, 0]
-    return rows, inv_diag
+    diagonal = ab[b]
+    upper = np.zeros((n + w, w))
+    lower = np.zeros((n + w, w))
+    for m in range(1, b + 1):
+        entries = ab[b - m, m:] / diagonal[: n - m]  # Û[i, i + m], i = 0..n-m-1
+        upper[: n - m, m - 1] = entries
+        lower[: n - m, m - 1] = entries[::-1]  # column j = i + m at row n - 1 - j
+    scale = np.zeros(n + w)
+    scale[:n] = 1.0 / diagonal**2
+    return UnitFactor(upper, lower, scale)
 
 
 def response_windows(responses: np.ndarray) -> np.ndarray:
@@ -178,32 +208,30 @@ def response_windows(responses: np.ndarray) -> np.ndarray:
     return np.stack([first, last], axis=1).astype(np.int64)
 
 
-def upper_pair(first: sp.spmatrix, second: sp.spmatrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Upper triangles of two symmetric matrices on one pattern, by rows, diagonal first.
+def upper_rows(matrix: sp.spmatrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Upper triangle of a symmetric matrix by rows, diagonal first, for :func:`symmetric_product`.
 
     Returns ``ptr`` (n + 1,), ``offset`` (nnz,) = column - row (uint8, or uint16 for a wide band)
-    and ``values`` (nnz, 2): half the bytes of a CSR of both, and the product reads them once.
+    and ``values`` (nnz,): the product reads each stored entry once for both triangles.
     """
-    a, b = sp.triu(first).tocoo(), sp.triu(second).tocoo()
-    n = a.shape[0]
-    row = np.concatenate([a.row, b.row]).astype(np.int64)
-    key = row * n + np.concatenate([a.col, b.col])
-    unique, inverse = np.unique(key, return_inverse=True)
-    values = np.zeros((unique.size, 2))
-    values[:, 0] = np.bincount(inverse[: a.nnz], a.data, minlength=unique.size)
-    values[:, 1] = np.bincount(inverse[a.nnz :], b.data, minlength=unique.size)
-    rows, cols = unique // n, unique % n
-    ptr = np.zeros(n + 1, dtype=np.int64)
-    ptr[1:] = np.cumsum(np.bincount(rows, minlength=n))
-    if not np.array_equal(rows[ptr[:-1]], cols[ptr[:-1]]):
-        raise ValueError("upper_pair: a row without its diagonal entry")
-    offset = cols - rows
-    return ptr, offset.astype(np.uint8 if offset.max() < 256 else np.uint16), values
+    upper = sp.triu(matrix).tocsr()
+    upper.sum_duplicates()
+    upper.sort_indices()
+    n = upper.shape[0]
+    rows = np.repeat(np.arange(n), np.diff(upper.indptr))
+    offset = upper.indices - rows
+    if np.any(offset[upper.indptr[:-1]] != 0) or np.any(np.diff(upper.indptr) == 0):
+        raise ValueError("upper_rows: a row without its diagonal entry")
+    return (
+        upper.indptr.astype(np.int64),
+        offset.astype(np.uint8 if offset.max() < 256 else np.uint16),
+        upper.data.astype(float),
+    )
 
 
 @njit(cache=True, fastmath={"contract"})
-def symmetric_product(ptr, offset, values, x, y, out, width):  # pragma: no cover - compiled
-    """out = M x + K y from the upper triangles (:func:`upper_pair`); out (n + w,)."""
+def symmetric_product(ptr, offset, values, x, out, width):  # pragma: no cover - compiled
+    """out = A x from A's upper triangle (:func:`upper_rows`); out (n + w,), its last w entries zeroed."""
     w = len(width)
     n = ptr.size - 1
     for i in range(w):
@@ -211,58 +239,69 @@ def symmetric_product(ptr, offset, values, x, y, out, width):  # pragma: no cove
     for i in range(n):
         out[i + w] = 0.0  # row i is the first to add to row i + w
         xi = x[i]
-        yi = y[i]
         q0 = ptr[i]
-        t = out[i] + values[q0, 0] * xi + values[q0, 1] * yi
+        t = out[i] + values[q0] * xi
         for q in range(q0 + 1, ptr[i + 1]):
             j = i + offset[q]
-            t += values[q, 0] * x[j] + values[q, 1] * y[j]
-            out[j] += values[q, 0] * xi + values[q, 1] * yi
+            t += values[q] * x[j]
+            out[j] += values[q] * xi
         out[i] = t
 
 
 @njit(cache=True, fastmath={"contract"})
-def substitute(rows, inv_diag, b, width):  # pragma: no cover - compiled
-    """Solve Uᵀ U x = b in place; b (n + w,) with a zero tail of w entries."""
-    w = len(width)
-    n = rows.shape[0] - w
-    following = b[0]  # b[j] complete, carried in a register: the latency chain is one FMA and one product
-    for j in range(n):  # Uᵀ z = b, by columns of Uᵀ (rows of U)
-        zj = following * inv_diag[j]
-        b[j] = zj
-        following = b[j + 1] - rows[j, 1] * zj
-        for m in range(2, w + 1):
-            b[j + m] -= rows[j, m] * zj
-    for jj in range(n):  # U x = z, by rows
-        j = n - 1 - jj  # not range(n - 1, -1, -1): LLVM then misses j >= 0 (numba's wrap-around test)
-        # Four partial sums, the newest unknown last: a row's sum is then no long chain of
-        # dependent FMAs, and the rows overlap in the out-of-order window.
-        s0 = 0.0
-        s1 = 0.0
-        s2 = 0.0
-        s3 = 0.0
-        for m in range(w, 1, -4):
-            s0 += rows[j, m] * b[j + m]
-            if m - 1 > 1:
-                s1 += rows[j, m - 1] * b[j + m - 1]
-            if m - 2 > 1:
-                s2 += rows[j, m - 2] * b[j + m - 2]
-            if m - 3 > 1:
-                s3 += rows[j, m - 3] * b[j + m - 3]
-        b[j] = ((b[j] - ((s0 + s1) + (s2 + s3))) - rows[j, 1] * b[j + 1]) * inv_diag[j]
+def _sweep(rows, rhs, scale, out, width):  # pragma: no cover - compiled
+    """out[r] = rhs[n - 1 - r] s_r - Σ_m rows[r, m - 1] out[r + m], r = n - 1 to 0; s = ``scale`` or 1.
 
-
-@njit(cache=True, fastmath={"contract"})
-def unit_responses(rows, inv_diag, b, dofs, width):  # pragma: no cover - compiled
-    """K̂⁻¹ E, E the unit columns at ``dofs`` (4,), in b (n + w, 4), to relative precision 1e-30.
-
-    A unit force's response decays away from it (K̂ is dominated by M / (β Δt²)), so the
-    substitutions stop once w + 1 successive rows are below 1e-30 of the largest entry: what is
-    left out changes nothing at double precision. b must be zero on entry outside the rows
-    returned by the previous call, ``(first, last)``; it is zero outside the new ones on return.
+    The sum takes the far unknowns first, in two partial sums, and the four newest from registers
+    last: the chain from one row to the next is then one FMA.
     """
     w = len(width)
     n = rows.shape[0] - w
+    x1 = 0.0
+    x2 = 0.0
+    x3 = 0.0
+    x4 = 0.0
+    for jj in range(n):
+        r = uint64(n - 1 - jj)
+        s0 = 0.0
+        s1 = 0.0
+        for m in range(w, 5, -2):
+            s0 += rows[r, m - 1] * out[r + uint64(m)]
+            s1 += rows[r, m - 2] * out[r + uint64(m - 1)]
+        t = (rhs[jj] * scale[r] if scale.size else rhs[jj]) - (s0 + s1)
+        t -= rows[r, 3] * x4
+        t -= rows[r, 2] * x3
+        t -= rows[r, 1] * x2
+        x0 = t - rows[r, 0] * x1
+        out[r] = x0
+        x4 = x3
+        x3 = x2
+        x2 = x1
+        x1 = x0
+
+
+@njit(cache=True)
+def solve(upper, lower, scale, b, sweep, width):  # pragma: no cover - compiled
+    """Solve Ûᵀ D² Û x = b in place (:class:`UnitFactor`); b and ``sweep`` (n + w,) with zero tails.
+
+    Forward Ûᵀ z = b into ``sweep`` in reverse order (row j at n - 1 - j, so that both sweeps
+    read their unknowns at positive offsets), then Û x = D⁻² z into b.
+    """
+    _sweep(lower, b, scale[:0], sweep, width)
+    _sweep(upper, sweep, scale, b, width)
+
+
+@njit(cache=True, fastmath={"contract"})
+def unit_responses(upper, scale, b, dofs, width):  # pragma: no cover - compiled
+    """K̂⁻¹ E, E the unit columns at ``dofs`` (4,), in b (n + w, 4), to relative precision 1e-30.
+
+    A unit force's response decays away from it (K̂ is dominated by M / (β Δt²)), so the
+    sweeps stop once w + 1 successive rows are below 1e-30 of the largest entry: what is left
+    out changes nothing at double precision. b must be zero on entry outside the rows returned
+    by the previous call, ``(first, last)``; it is zero outside the new ones on return.
+    """
+    w = len(width)
+    n = upper.shape[0] - w
     start = min(min(dofs[0], dofs[1]), min(dofs[2], dofs[3]))
     end = max(max(dofs[0], dofs[1]), max(dofs[2], dofs[3]))
     for c in range(4):
@@ -270,16 +309,16 @@ def unit_responses(rows, inv_diag, b, dofs, width):  # pragma: no cover - compil
     peak = 0.0
     quiet = 0
     last = n - 1
-    for j in range(start, n):
-        big = 0.0
-        for c in range(4):
-            z = b[j, c] * inv_diag[j]
-            b[j, c] = z
-            big = max(big, abs(z))
+    for j in range(start, n):  # Ûᵀ z = e by columns of Ûᵀ, then D⁻² z
         for m in range(1, w + 1):
-            r = rows[j, m]
+            r = upper[j, m - 1]
             for c in range(4):
                 b[j + m, c] -= r * b[j, c]
+        big = 0.0
+        for c in range(4):
+            z = b[j, c] * scale[j]
+            b[j, c] = z
+            big = max(big, abs(z))
         peak = max(peak, big)
         quiet = quiet + 1 if big <= TRUNCATION * peak else 0
         if quiet > w and j > end:
@@ -291,14 +330,13 @@ def unit_responses(rows, inv_diag, b, dofs, width):  # pragma: no cover - compil
     peak = 0.0
     quiet = 0
     first = 0
-    for jj in range(last + 1):
+    for jj in range(last + 1):  # Û x = D⁻² z by rows
         j = last - jj
         big = 0.0
         for c in range(4):
             s = b[j, c]
             for m in range(w, 0, -1):
-                s -= rows[j, m] * b[j + m, c]
-            s *= inv_diag[j]
+                s -= upper[j, m - 1] * b[j + m, c]
             b[j, c] = s
             big = max(big, abs(s))
         peak = max(peak, big)
@@ -310,7 +348,7 @@ def unit_responses(rows, inv_diag, b, dofs, width):  # pragma: no cover - compil
 
 
 @njit(cache=True)
-def _element_responses(rows, inv_diag, unit, first, last, zd, response_t, Wz, width):  # pragma: no cover
+def _element_responses(upper, scale, unit, first, last, zd, response_t, Wz, width):  # pragma: no cover
     """unit_responses for a new element after clearing the last one's rows; Wz = W[zd]. Returns the rows."""
     for i in range(first, last + 1):
         for c in range(4):
@@ -318,7 +356,7 @@ def _element_responses(rows, inv_diag, unit, first, last, zd, response_t, Wz, wi
     for i in range(4):
         for q in range(Wz.shape[1]):
             Wz[i, q] = response_t[q, zd[i]]
-    return unit_responses(rows, inv_diag, unit, zd, width)
+    return unit_responses(upper, scale, unit, zd, width)
 
 
 @njit(cache=True)
@@ -416,26 +454,27 @@ def _settle(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, kapp
 
 
 @njit(cache=True, fastmath={"contract"})
-def _advance(u, v, acc, x, y, u_new, cf):  # pragma: no cover - compiled
-    """Newmark update to u₁ = u_new (n,), then x = c1 u + c2 v + c3 a, y = d1 u + d2 v + d3 a."""
-    c1, c2, c3, d1, d2, d3 = cf[0], cf[1], cf[2], cf[3], cf[4], cf[5]
+def _advance(u, v, acc, x, y, b, cf):  # pragma: no cover - compiled
+    """Newmark update to u₁ = b + y (n,), then x = e1 u + e2 v + e3 a, y = g1 u + g2 v + g3 a."""
+    e1, e2, e3, g1, g2, g3 = cf[0], cf[1], cf[2], cf[3], cf[4], cf[5]
     a0, a1, a2, a3, a4, a5 = cf[6], cf[7], cf[8], cf[9], cf[10], cf[11]
     for i in range(u.size):
-        du = u_new[i] - u[i]
+        u_new = b[i] + y[i]
+        du = u_new - u[i]
         acc_new = a0 * du - a2 * v[i] - a3 * acc[i]
         v_new = a1 * du - a4 * v[i] - a5 * acc[i]
-        u[i] = u_new[i]
+        u[i] = u_new
         v[i] = v_new
         acc[i] = acc_new
-        x[i] = c1 * u_new[i] + c2 * v_new + c3 * acc_new
-        y[i] = d1 * u_new[i] + d2 * v_new + d3 * acc_new
+        x[i] = e1 * u_new + e2 * v_new + e3 * acc_new
+        y[i] = g1 * u_new + g2 * v_new + g3 * acc_new
 
 
 @njit(cache=True)
-def _known_part(d, k, h, zd, u_known, u, v, acc, y_p, yd_p, ydd_p, rhs_p, y_known, dl_known, rate_term):
+def _known_part(d, k, h, zd, b, y, u, v, acc, y_p, yd_p, ydd_p, rhs_p, y_known, dl_known, rate_term):
     """Pantograph without contact (y_known), the contact gap, dropper elongations and damping shares.
 
-    Returns the gap without contact force, m; fills y_known, dl_known = B u_known and
+    u_known = b + y. Returns the gap without contact force, m; fills y_known, dl_known = B u_known and
     rate_term = β k B (a1 u₀ + a4 v₀ + a5 a₀).
     """  # pragma: no cover - compiled
     cf = d.coefficients
@@ -457,11 +496,13 @@ def _known_part(d, k, h, zd, u_known, u, v, acc, y_p, yd_p, ydd_p, rhs_p, y_know
         t_rate = 0.0
         for p in range(d.b_ptr[q], d.b_ptr[q + 1]):
             j = d.b_index[p]
-            t_known += d.b_values[p] * u_known[j]
+            t_known += d.b_values[p] * (b[j] + y[j])
             t_rate += d.b_values[p] * (a1 * u[j] + a4 * v[j] + a5 * acc[j])
         dl_known[q] = t_known
         rate_term[q] = beta * d.dropper_rate[q] * t_rate
-    wire = h[0] * u_known[zd[0]] + h[1] * u_known[zd[1]] + h[2] * u_known[zd[2]] + h[3] * u_known[zd[3]]
+    wire = 0.0
+    for i in range(4):
+        wire += h[i] * (b[zd[i]] + y[zd[i]])
     return y_known[n_p - 1] - d.wire_z[k] - wire
 
 
@@ -507,13 +548,13 @@ def run_steps(d, s, first, stop, width):  # pragma: no cover - compiled
     _resume(u, v, acc, x, y, cf, first == 1, s.flags[1], d.z_dofs, d.dropper_response_t, Wz)
 
     for k in range(first, stop):
-        symmetric_product(d.mk_ptr, d.mk_offset, d.mk_values, x, y, b, width)  # K̂ u_known = M x + K y
-        substitute(d.rows, d.inv_diag, b, width)
+        symmetric_product(d.m_ptr, d.m_offset, d.m_values, x, b, width)  # u_known = K̂⁻¹ M x + y
+        solve(d.upper, d.lower, d.scale, b, s.sweep, width)
         e = d.element[k]
         zd = d.z_dofs[e]
         if e != s.flags[1]:  # the unit responses of the new contact-wire element, P = K̂⁻¹ E, and W[zd]
             s.flags[4], s.flags[5] = _element_responses(
-                d.rows, d.inv_diag, unit, s.flags[4], s.flags[5], zd, d.dropper_response_t, Wz, width
+                d.upper, d.scale, unit, s.flags[4], s.flags[5], zd, d.dropper_response_t, Wz, width
             )
             s.flags[1] = e
         h = d.shape[k]
@@ -524,7 +565,7 @@ def run_steps(d, s, first, stop, width):  # pragma: no cover - compiled
         for q in range(n_drop):
             g_dc[q] = Wz[0, q] * h[0] + Wz[1, q] * h[1] + Wz[2, q] * h[2] + Wz[3, q] * h[3]
         gap_known = _known_part(
-            d, k, h, zd, b, u, v, acc, y_p, yd_p, ydd_p, rhs_p, y_known, dl_known, rate_term
+            d, k, h, zd, b, y, u, v, acc, y_p, yd_p, ydd_p, rhs_p, y_known, dl_known, rate_term
         )
         contact, f, m, resolved = _settle(
             contact,
@@ -542,7 +583,8 @@ def run_steps(d, s, first, stop, width):  # pragma: no cover - compiled
         )
         s.flags[3] += 0 if resolved else 1
 
-        # u₁ = u_known + u*_c f + Σ W_d λ_d, over the rows where these responses are not negligible.
+        # u₁ = u_known + u*_c f + Σ W_d λ_d (with u_known = b + y), over the rows where these
+        # responses are not negligible.
         p0, p1, p2, p3 = f * h[0], f * h[1], f * h[2], f * h[3]
         for i in range(s.flags[4], s.flags[5] + 1):
             b[i] += unit[i, 0] * p0 + unit[i, 1] * p1 + unit[i, 2] * p2 + unit[i, 3] * p3

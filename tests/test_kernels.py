@@ -102,27 +102,41 @@ def test_without_numba_auto_falls_back_to_numpy_and_numba_says_how_to_install(en
         simulate_passage(*args, backend="numba")
 
 
-def test_banded_substitution_and_product_equal_scipy(kernels, en50318):
+def test_banded_solve_and_mass_product_equal_scipy(kernels, en50318):
     system, _ = en50318
     prepared = prepare_passage(system, 2e-3)
     factor = prepared.factor
     w = kernels.padded_width(factor.bandwidth)
-    rows, inv_diag = kernels.factor_rows(factor.factor, w)
+    unit = kernels.unit_factor(factor.factor, w)
     rng = np.random.default_rng(1)
     n = system.n_dofs
     rhs = rng.standard_normal(n)
-    b = np.zeros(n + w)
+    b, sweep = np.zeros(n + w), np.zeros(n + w)
     b[:n] = rhs
-    kernels.substitute(rows, inv_diag, b, (0,) * w)
+    kernels.solve(*unit, b, sweep, (0,) * w)
     exact = sla.cho_solve_banded((factor.factor, False), rhs)
     assert np.max(np.abs(b[:n] - exact)) < 1e-12 * np.max(np.abs(exact))
-    assert np.all(b[n:] == 0.0)
+    assert np.all(b[n:] == 0.0) and np.all(sweep[n:] == 0.0)
 
-    x, y = rng.standard_normal(n), rng.standard_normal(n)
-    out = np.zeros(n + w)
-    kernels.symmetric_product(*kernels.upper_pair(system.mass, system.stiffness), x, y, out, (0,) * w)
-    exact = system.mass @ x + system.stiffness @ y
+    x = rng.standard_normal(n)
+    out = np.ones(n + w)
+    kernels.symmetric_product(*kernels.upper_rows(system.mass), x, out, (0,) * w)
+    exact = system.mass @ x
     assert np.max(np.abs(out[:n] - exact)) < 1e-12 * np.max(np.abs(exact))
+    assert np.all(out[n:] == 0.0)
+
+
+def test_rayleigh_identity_gives_the_newmark_right_hand_side(en50318):
+    # The compiled loop solves K̂ u = M x + K y as u = K̂⁻¹ M (x - (c_m / c_k) y) + y / c_k.
+    system, _ = en50318
+    prepared = prepare_passage(system, 2e-3)
+    nm = prepared.constants
+    c_k, c_m = 1.0 + system.beta * nm.a1, nm.a0 + system.alpha * nm.a1
+    rng = np.random.default_rng(2)
+    x, y = rng.standard_normal(system.n_dofs), 1e-3 * rng.standard_normal(system.n_dofs)
+    direct = prepared.factor.solve(system.mass @ x + system.stiffness @ y)
+    identity = prepared.factor.solve(system.mass @ (x - (c_m / c_k) * y)) + y / c_k
+    assert np.max(np.abs(identity - direct)) < 1e-12 * np.max(np.abs(direct))
 
 
 def test_unit_responses_are_the_full_solve_where_they_are_kept(kernels):
@@ -131,11 +145,11 @@ def test_unit_responses_are_the_full_solve_where_they_are_kept(kernels):
     system = linearise(find_shape(build_layout(catenary, level_design(catenary), 10, 2.0, 4.0)))
     factor = prepare_passage(system, 1e-3).factor
     w = kernels.padded_width(factor.bandwidth)
-    rows, inv_diag = kernels.factor_rows(factor.factor, w)
+    unit_factor = kernels.unit_factor(factor.factor, w)
     n = system.n_dofs
     dofs = system.contact_wire.z_dofs[len(system.contact_wire.z_dofs) // 2]
     unit = np.zeros((n + w, 4))
-    first, last = kernels.unit_responses(rows, inv_diag, unit, dofs, (0,) * w)
+    first, last = kernels.unit_responses(unit_factor.upper, unit_factor.scale, unit, dofs, (0,) * w)
     exact = np.zeros((n, 4))
     exact[dofs, np.arange(4)] = 1.0
     exact = factor.solve(exact)
