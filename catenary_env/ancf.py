@@ -26,16 +26,23 @@ _GP, _GW = np.polynomial.legendre.leggauss(5)
 GAUSS_XI = 0.5 * (_GP + 1.0)
 GAUSS_W = 0.5 * _GW
 
-# Derivative coefficients of the four nodal vectors (r_i, r'_i, r_j, r'_j), split as A0 / L**pa
-# for d r / ds and B0 / L**pb for d² r / ds².
+# Derivatives of the four nodal vectors' shape functions at the Gauss points, for the element written
+# in the scaled coordinates q̃ = (r_i / L, r'_i, r_j / L, r'_j): then r_s = Σ_k A0[g, k] q̃_k and
+# L r_ss = Σ_k B0[g, k] q̃_k, tables that no longer depend on the element (see cable_state).
 _XI = GAUSS_XI[:, None]
 _A0 = np.hstack(
     [-6 * _XI + 6 * _XI**2, 1 - 4 * _XI + 3 * _XI**2, 6 * _XI - 6 * _XI**2, -2 * _XI + 3 * _XI**2]
 )
-_PA = np.array([1.0, 0.0, 1.0, 0.0])
 _B0 = np.hstack([-6 + 12 * _XI, -4 + 6 * _XI, 6 - 12 * _XI, -2 + 6 * _XI])
-_PB = np.array([2.0, 1.0, 2.0, 1.0])
-_J = np.array([[0.0, 1.0], [-1.0, 0.0]])
+_POSITION = np.array([1.0, 0.0, 1.0, 0.0])  # 1 on the positions r_i, r_j; 0 on the gradients
+_S0 = np.stack([_A0, _B0], axis=1)  # (G, 2, 4): row i = 0 gives r_s, i = 1 gives L r_ss
+# Gauss-weighted tables that turn the sums over Gauss points and shape functions into one matrix
+# product over all elements: _FORCE_TABLE[(g, i), k] = w_g S0[g, i, k] and
+# _TANGENT_TABLE[(g, i, j), (k, m)] = w_g S0[g, i, k] S0[g, j, m].
+_FORCE_TABLE = (GAUSS_W[:, None, None] * _S0).reshape(-1, 4)
+_TANGENT_TABLE = (
+    GAUSS_W[:, None, None, None, None] * _S0[:, :, None, :, None] * _S0[:, None, :, None, :]
+).reshape(-1, 16)
 
 
 class CableState(NamedTuple):
@@ -86,6 +93,21 @@ def hermite_dxi(xi: np.ndarray, length: np.ndarray) -> np.ndarray:
     )
 
 
+def _outer(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """u vᵀ at every Gauss point and element, for (G, 2, E) arrays; shape (G, 2, 2, E)."""
+    return u[:, :, None] * v[:, None, :]
+
+
+def _gauss_sum(table: np.ndarray, per_point: np.ndarray) -> np.ndarray:
+    """Σ_a table[a, b] per_point[a, c]; shape (b, c).
+
+    a runs over the leading axes of ``per_point`` (Gauss points and strain blocks, table.shape[0]
+    entries in all), c over the rest (components and elements): one matrix product over all
+    elements (BLAS) rather than a small sum per element.
+    """
+    return table.T @ per_point.reshape(table.shape[0], -1)
+
+
 def cable_state(
     q: np.ndarray,
     length: np.ndarray,
@@ -96,6 +118,15 @@ def cable_state(
 ) -> CableState:
     """Internal forces, tangent stiffness and length derivative of cable elements.
 
+    At a Gauss point the energy density W = ½ EA ε² + ½ EI κ² depends on q only through the
+    generalised strains e = (r_s, r_ss) = G q, linear in q; so the force is Σ_g w_g L Gᵀ ∇W and the
+    tangent Σ_g w_g L Gᵀ ∇²W G. In the scaled coordinates q̃ (see ``_A0``) G is a fixed table, and
+    both sums are one matrix product over all elements. The length derivative follows from scaling
+    the element by λ (positions and L by λ, gradients fixed): the axial energy grows as λ and the
+    bending energy as 1/λ, so Euler's theorem for homogeneous functions gives
+    L df/dL = (1 - P) f - 2 f_bending - K P q, with P = 1 on positions and 0 on gradients; it holds
+    for the quadrature too, whose points do not move.
+
     Parameters
     ----------
     q : ndarray, shape (E, 8)
@@ -104,66 +135,62 @@ def cable_state(
         Reference (unstretched) lengths, m.
     axial_stiffness, bending_stiffness : ndarray, shape (E,)
         EA (N) and EI (N·m²).
+    tangent, dlength : bool
+        Whether to return the stiffness and the length derivative.
     """
+    # Arrays keep the element axis last, so that every elementwise operation runs over all
+    # elements at once; per Gauss point vectors have shape (G, 2, E).
     n_el = q.shape[0]
-    qk = q.reshape(n_el, 4, 2)
-    L = length[:, None, None]  # (E, 1, 1)
-    a = _A0[None] / L**_PA  # (E, G, 4)
-    b = _B0[None] / L**_PB
-    rs = np.einsum("egk,ekd->egd", a, qk)
-    rss = np.einsum("egk,ekd->egd", b, qk)
-    nrm = np.sqrt(np.einsum("egd,egd->eg", rs, rs))
+    L = length
+    scale = L ** -_POSITION[:, None]  # q̃_k = scale_k q_k, (4, E)
+    qs = q.T.reshape(4, 2, n_el) * scale[:, None, :]
+    strain = (_S0.reshape(-1, 4) @ qs.reshape(4, -1)).reshape(-1, 2, 2, n_el)  # (G, r_s | L r_ss, 2, E)
+    rs = strain[:, 0]
+    rss = strain[:, 1] / L
+    nrm = np.sqrt(rs[:, 0] ** 2 + rs[:, 1] ** 2)  # (G, E)
     eps = nrm - 1.0
-    t = rs / nrm[..., None]
-    kappa = rs[..., 0] * rss[..., 1] - rs[..., 1] * rss[..., 0]
-    p = rss @ _J.T  # J rss
-    s = rs @ _J  # J^T rs
-    ea = axial_stiffness[:, None]
-    ei = bending_stiffness[:, None]
-    wl = GAUSS_W[None, :] * length[:, None]  # (E, G)
-    v = a[..., None] * p[:, :, None, :] + b[..., None] * s[:, :, None, :]  # (E, G, 4, 2) = dκ/dq_k
-    phi = (ea * eps)[..., None, None] * a[..., None] * t[:, :, None, :] + (ei * kappa)[..., None, None] * v
-    force = np.einsum("eg,egkd->ekd", wl, phi).reshape(n_el, 8)
+    t = rs / nrm[:, None]
+    kappa = rs[:, 0] * rss[:, 1] - rs[:, 1] * rss[:, 0]
+    p = np.stack([rss[:, 1], -rss[:, 0]], axis=1)  # dκ/dr_s = J r_ss, J = [[0, 1], [-1, 0]]
+    s = np.stack([-rs[:, 1], rs[:, 0]], axis=1)  # dκ/dr_ss = Jᵀ r_s
+    ea, ei = axial_stiffness, bending_stiffness
+    moment = (ei * kappa)[:, None]  # EI κ, N·m
+
+    def nodal(d_rs: np.ndarray, d_rss: np.ndarray) -> np.ndarray:
+        """Σ_g w_g L Gᵀ (d_rs, d_rss) for (G, 2, E) arrays, in the original coordinates; shape (E, 8)."""
+        per_point = np.stack([d_rs * L, d_rss], axis=1)  # the L of ds = L dξ cancels the 1/L of r_ss
+        f = _gauss_sum(_FORCE_TABLE, per_point).reshape(4, 2, n_el) * scale[:, None, :]
+        return f.reshape(8, n_el).T.copy()
+
+    force = nodal((ea * eps)[:, None] * t + moment * p, moment * s)
 
     stiffness = None
-    if tangent:
-        tt = t[..., :, None] * t[..., None, :]
-        eye = np.eye(2)
-        d_ax = ea[..., None, None] * (tt + (eps / nrm)[..., None, None] * (eye - tt))  # (E, G, 2, 2)
-        k_ax = np.einsum("eg,egk,egm,egcd->ekcmd", wl, a, a, d_ax)
-        k_v = np.einsum("eg,egkc,egmd->ekcmd", wl * ei, v, v)
-        ab = np.einsum("egk,egm->egkm", a, b)
-        geo = np.einsum("eg,egkm,cd->ekcmd", wl * ei * kappa, ab, _J) + np.einsum(
-            "eg,egmk,cd->ekcmd", wl * ei * kappa, ab, _J.T
-        )
-        stiffness = (k_ax + k_v + geo).reshape(n_el, 8, 8)
+    if tangent or dlength:
+        # ∇²W in blocks (r_s, L r_ss) x (r_s, L r_ss), times the L of ds: hessian[g, i, j, a, b, e].
+        hessian = np.empty((GAUSS_W.size, 2, 2, 2, 2, n_el))
+        axial = ea * eps / nrm  # ∂²(½ EA ε²)/∂r_s² = EA t tᵀ + EA ε / |r_s| (I - t tᵀ)
+        h = _outer(t * (ea - axial)[:, None], t) + _outer(p * ei, p)
+        h[:, 0, 0] += axial
+        h[:, 1, 1] += axial
+        hessian[:, 0, 0] = h * L
+        h = _outer(p * ei, s)  # plus EI κ ∂²κ/∂r_s∂r_ss = EI κ J
+        h[:, 0, 1] += moment[:, 0]
+        h[:, 1, 0] -= moment[:, 0]
+        hessian[:, 0, 1] = h
+        hessian[:, 1, 0] = h.swapaxes(1, 2)
+        hessian[:, 1, 1] = _outer(s * (ei / L), s)
+        k = _gauss_sum(_TANGENT_TABLE, hessian).reshape(4, 4, 2, 2, n_el)
+        k *= scale[:, None, None, None, :] * scale[None, :, None, None, :]
+        stiffness = np.ascontiguousarray(k.transpose(4, 0, 2, 1, 3)).reshape(n_el, 8, 8)
 
     force_dlength = None
     if dlength:
-        aL = -_PA * a / L
-        bL = -_PB * b / L
-        rsL = np.einsum("egk,ekd->egd", aL, qk)
-        rssL = np.einsum("egk,ekd->egd", bL, qk)
-        tt = t[..., :, None] * t[..., None, :]
-        d_ax = ea[..., None, None] * (tt + (eps / nrm)[..., None, None] * (np.eye(2) - tt))
-        d_ax_rsL = np.einsum("egcd,egd->egc", d_ax, rsL)
-        dphi_ax = (ea * eps)[..., None, None] * aL[..., None] * t[:, :, None, :] + a[..., None] * d_ax_rsL[
-            :, :, None, :
-        ]
-        kappaL = np.einsum("egd,egd->eg", rsL, p) + np.einsum("egd,egd->eg", s, rssL)
-        pL = rssL @ _J.T
-        sL = rsL @ _J
-        vL = (
-            aL[..., None] * p[:, :, None, :]
-            + a[..., None] * pL[:, :, None, :]
-            + bL[..., None] * s[:, :, None, :]
-            + b[..., None] * sL[:, :, None, :]
-        )
-        dphi_b = (ei * kappaL)[..., None, None] * v + (ei * kappa)[..., None, None] * vL
-        force_dlength = (
-            np.einsum("g,egkd->ekd", GAUSS_W, phi) + np.einsum("eg,egkd->ekd", wl, dphi_ax + dphi_b)
-        ).reshape(n_el, 8)
-    return CableState(force, stiffness, force_dlength)
+        assert stiffness is not None
+        position = np.repeat(_POSITION, 2)
+        k_pq = np.matmul(stiffness, (position * q)[..., None])[..., 0]
+        force_bending = nodal(moment * p, moment * s)
+        force_dlength = ((1.0 - position) * force - 2.0 * force_bending - k_pq) / L[:, None]
+    return CableState(force, stiffness if tangent else None, force_dlength)
 
 
 def axial_force(q: np.ndarray, length: np.ndarray, axial_stiffness: np.ndarray, xi: float) -> np.ndarray:

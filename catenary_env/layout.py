@@ -135,14 +135,23 @@ class Layout:
         return self.node_dof[nodes] + 1
 
 
-def _subdivide(keys: list[float], max_length: float) -> list[float]:
-    """Key positions plus equally spaced points so that no interval exceeds ``max_length``."""
-    keys = sorted(set(round(k, 9) for k in keys))
-    points = [keys[0]]
-    for a, b in zip(keys[:-1], keys[1:], strict=True):
-        n = max(1, math.ceil((b - a) / max_length - 1e-9))
-        points += [a + (b - a) * i / n for i in range(1, n + 1)]
-    return points
+def _subdivide(keys: np.ndarray, max_length: float) -> np.ndarray:
+    """Key positions plus equally spaced points so that no interval exceeds ``max_length``, m; sorted."""
+    keys = np.unique(np.round(keys, 9))
+    a, b = keys[:-1], keys[1:]
+    n = np.maximum(1, np.ceil((b - a) / max_length - 1e-9)).astype(int)
+    interval = np.repeat(np.arange(a.size), n)
+    i = np.arange(1, interval.size + 1) - np.repeat(np.cumsum(n) - n, n)  # 1..n within each interval
+    return np.r_[keys[0], a[interval] + (b - a)[interval] * i / n[interval]]
+
+
+def _find(node_x: np.ndarray, nodes: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The node among ``nodes`` (in order of x) that stands at each ``x``, to a micrometre."""
+    at = node_x[nodes]
+    i = np.clip(np.searchsorted(at, np.asarray(x) - 1e-6), 0, at.size - 1)
+    if np.any(np.abs(at[i] - x) > 1e-6):
+        raise ValueError("layout: no node at a key position")  # a bug, never a user error
+    return nodes[i]
 
 
 def build_layout(
@@ -171,78 +180,75 @@ def build_layout(
             (dropper_index == n_d - 1) & (dropper_span < n_spans - 1)
         )
 
-    cw_points = _subdivide(list(support_x) + list(dropper_x), contact_wire_element)
-    mw_keys = list(support_x) + list(dropper_x[~on_stitch])
+    interior = support_x[1:-1]
+    cw_points = _subdivide(np.r_[support_x, dropper_x], contact_wire_element)
+    mw_keys = np.r_[support_x, dropper_x[~on_stitch]]
     if stitch is not None:
-        mw_keys += [x + s for x in support_x[1:-1] for s in (-half, half)]
+        mw_keys = np.r_[mw_keys, (interior[:, None] + [-half, half]).ravel()]
     mw_points = _subdivide(mw_keys, messenger_wire_element)
-    st_points = sorted(round(x, 9) for x in dropper_x[on_stitch])
+    st_points = np.sort(np.round(dropper_x[on_stitch], 9))
 
-    # Number nodes in order of x (CW before stitch before MW at the same x) for a banded matrix.
-    entries = sorted(
-        [(x, CONTACT) for x in cw_points]
-        + [(x, MESSENGER) for x in mw_points]
-        + [(x, STITCH) for x in st_points]
+    # Number nodes in order of x (CW, MW, stitch at the same x) for a banded matrix.
+    all_x = np.r_[cw_points, mw_points, st_points]
+    all_kind = np.r_[
+        np.full(cw_points.size, CONTACT), np.full(mw_points.size, MESSENGER), np.full(st_points.size, STITCH)
+    ]
+    order = np.lexsort((all_kind, all_x))
+    node_x, node_kind = all_x[order], all_kind[order]
+    cw_nodes, mw_nodes, st_nodes = (
+        np.flatnonzero(node_kind == kind) for kind in (CONTACT, MESSENGER, STITCH)
     )
-    node_x = np.array([e[0] for e in entries])
-    node_kind = np.array([e[1] for e in entries])
-    lookup = {(k, round(x, 6)): i for i, (x, k) in enumerate(entries)}
-    hinges = {lookup[(MESSENGER, round(x, 6))] for x in support_x[1:-1]}
+    hinges = _find(node_x, mw_nodes, interior)
     sizes = np.where(node_kind == STITCH, 2, 4)
-    sizes[list(hinges)] = 6
+    sizes[hinges] = 6
     node_dof = np.concatenate([[0], np.cumsum(sizes)[:-1]])
 
-    def node(kind: int, x: float) -> int:
-        return lookup[(kind, round(x, 6))]
-
-    cw_nodes = np.array([node(CONTACT, x) for x in cw_points])
-    mw_nodes = np.array([node(MESSENGER, x) for x in mw_points])
     cable_nodes = np.vstack([np.c_[cw_nodes[:-1], cw_nodes[1:]], np.c_[mw_nodes[:-1], mw_nodes[1:]]])
     cable_wire = np.r_[np.full(cw_nodes.size - 1, CONTACT), np.full(mw_nodes.size - 1, MESSENGER)]
-    wires = (c.contact_wire, c.messenger_wire)
 
     def per_cable(attr: str) -> np.ndarray:
-        return np.array([getattr(wires[w], attr) for w in cable_wire], dtype=float)
+        return np.where(
+            cable_wire == CONTACT, float(getattr(c.contact_wire, attr)), getattr(c.messenger_wire, attr)
+        )
 
-    bar_nodes, bar_kind, bar_k, bar_ea, bar_rho = [], [], [], [], []
-    dropper_bars = []
+    # Bars: the droppers (top, bottom) in dropper order, then three bars per stitch wire.
+    top = np.empty(dropper_x.size, dtype=int)
+    top[on_stitch] = _find(node_x, st_nodes, dropper_x[on_stitch])
+    top[~on_stitch] = _find(node_x, mw_nodes, dropper_x[~on_stitch])
+    dropper_nodes = np.c_[top, _find(node_x, cw_nodes, dropper_x)]
+    n_drop = dropper_x.size
+    stitch_nodes = np.zeros((0, 2), dtype=int)
+    stitch_ea = stitch_rho = math.nan
+    if stitch is not None:
+        chain = np.c_[
+            _find(node_x, mw_nodes, interior - half),
+            _find(node_x, st_nodes, interior - L + d[-1]),
+            _find(node_x, st_nodes, interior + d[0]),
+            _find(node_x, mw_nodes, interior + half),
+        ]
+        stitch_nodes = np.stack([chain[:, :-1], chain[:, 1:]], axis=2).reshape(-1, 2)
+        stitch_ea, stitch_rho = stitch.axial_stiffness, stitch.linear_mass
+    n_stitch = stitch_nodes.shape[0]
+    bars = np.vstack([dropper_nodes, stitch_nodes]).astype(int)
+    drop = np.arange(n_drop)
+    stitch_bars = (n_drop + np.arange(n_stitch)).reshape(-1, 3)
+    bar_kind = np.r_[np.full(n_drop, DROPPER), np.full(n_stitch, STITCH_BAR)]
     k_d = c.dropper.stiffness if c.dropper.stiffness is not None else math.nan
     ea_d = c.dropper.axial_stiffness if c.dropper.axial_stiffness is not None else math.nan
-    for x, hanging in zip(dropper_x, on_stitch, strict=True):
-        top = node(STITCH, x) if hanging else node(MESSENGER, x)
-        dropper_bars.append(len(bar_nodes))
-        bar_nodes.append((top, node(CONTACT, x)))
-        bar_kind.append(DROPPER)
-        bar_k.append(k_d)
-        bar_ea.append(ea_d)
-        bar_rho.append(c.dropper.linear_mass)
-    stitch_bars = []
-    if stitch is not None:
-        for xs in support_x[1:-1]:
-            chain = [
-                node(MESSENGER, xs - half),
-                node(STITCH, xs - L + d[-1]),
-                node(STITCH, xs + d[0]),
-                node(MESSENGER, xs + half),
-            ]
-            stitch_bars.append([len(bar_nodes) + i for i in range(3)])
-            for a, b in zip(chain[:-1], chain[1:], strict=True):
-                bar_nodes.append((a, b))
-                bar_kind.append(STITCH_BAR)
-                bar_k.append(math.nan)
-                bar_ea.append(stitch.axial_stiffness)
-                bar_rho.append(stitch.linear_mass)
+    bar_k = np.r_[np.full(n_drop, k_d, dtype=float), np.full(n_stitch, math.nan)]
+    bar_ea = np.r_[np.full(n_drop, ea_d, dtype=float), np.full(n_stitch, stitch_ea, dtype=float)]
+    bar_rho = np.r_[
+        np.full(n_drop, c.dropper.linear_mass, dtype=float), np.full(n_stitch, stitch_rho, dtype=float)
+    ]
 
     # An element's end at a hinge uses the gradient of its own side: (+2, +3) left of it, (+4, +5) right.
     start = node_dof[cable_nodes]
-    right_side = np.array([4 if a in hinges else 2 for a in cable_nodes[:, 0]])
+    right_side = np.where(np.isin(cable_nodes[:, 0], hinges), 4, 2)
     cable_dof_table = np.hstack(
         [start[:, :1] + [0, 1], (start[:, 0] + right_side)[:, None] + [0, 1], start[:, 1:] + [0, 1, 2, 3]]
     )
-    mw_supports = np.array([node(MESSENGER, x) for x in support_x])
-    cw_supports = np.array([node(CONTACT, x) for x in support_x])
-    bars = np.array(bar_nodes, dtype=int).reshape(-1, 2)
-    drop = np.array(dropper_bars, dtype=int)
+    mw_supports = _find(node_x, mw_nodes, support_x)
+    cw_supports = _find(node_x, cw_nodes, support_x)
     mass_nodes = np.r_[bars[drop, 0], bars[drop, 1], cw_supports, mw_supports]
     mass_values = np.r_[
         np.full(drop.size, c.dropper.clamp_mass_messenger),
@@ -265,15 +271,15 @@ def build_layout(
         cable_bending_stiffness=per_cable("bending_stiffness"),
         cable_linear_mass=per_cable("linear_mass"),
         bar_nodes=bars,
-        bar_kind=np.array(bar_kind, dtype=int),
-        bar_stiffness=np.array(bar_k, dtype=float),
-        bar_axial_stiffness=np.array(bar_ea, dtype=float),
-        bar_linear_mass=np.array(bar_rho, dtype=float),
+        bar_kind=bar_kind,
+        bar_stiffness=bar_k,
+        bar_axial_stiffness=bar_ea,
+        bar_linear_mass=bar_rho,
         dropper_bars=drop,
         dropper_span=dropper_span,
         dropper_index=dropper_index,
         dropper_height=c.contact_wire_height + np.tile(np.asarray(design.contact_wire_offsets), n_spans),
-        stitch_bars=np.array(stitch_bars, dtype=int).reshape(-1, 3),
+        stitch_bars=stitch_bars,
         support_x=support_x,
         messenger_supports=mw_supports,
         contact_supports=cw_supports,

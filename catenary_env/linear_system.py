@@ -18,7 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .ancf import hermite, hermite_dxi
-from .assembly import assemble, assemble_mass, scatter_matrix
+from .assembly import assemble, assemble_mass, free_matrix_scatter
 from .bar import bar_state
 from .layout import CONTACT
 from .shape_finding import StaticSolution
@@ -121,7 +121,14 @@ def linearise(static: StaticSolution) -> LinearSystem:
     c = lay.catenary
     n_all = lay.n_dofs
     X, lengths = static.positions, static.lengths
-    K = assemble(lay, X, lengths, tangent=True).stiffness
+    fixed = np.zeros(n_all, dtype=bool)
+    fixed[lay.node_dof[lay.wire_ends.ravel()]] = True
+    fixed[lay.node_dof[lay.messenger_supports]] = True
+    free = np.flatnonzero(~fixed)
+    index = np.full(n_all, -1)
+    index[free] = np.arange(free.size)
+
+    state = assemble(lay, X, lengths, tangent=True)
     # Replace the droppers' full bar tangent by their axial spring (module docstring).
     n_c = lay.cable_nodes.shape[0]
     drop = lay.dropper_bars
@@ -134,20 +141,19 @@ def linearise(static: StaticSolution) -> LinearSystem:
         lay.bar_axial_stiffness[drop] / lengths[n_c + drop],
     )
     b_row = np.hstack([-n, n])  # Δl = b_row · (u_a, u_b)
-    axial = rate[:, None, None] * b_row[:, :, None] * b_row[:, None, :]
-    K = K - scatter_matrix(bdofs, bs.stiffness, n_all) + scatter_matrix(bdofs, axial, n_all)
+    assert state.cable_stiffness is not None and state.bar_stiffness is not None
+    bar_stiffness = state.bar_stiffness.copy()
+    bar_stiffness[drop] = rate[:, None, None] * b_row[:, :, None] * b_row[:, None, :]
     springs = np.zeros(n_all)
     springs[lay.node_dof[lay.messenger_supports] + 1] += c.supports.messenger_stiffness
     springs[lay.node_dof[lay.contact_supports] + 1] += c.supports.steady_arm_stiffness
-    K = (K + sp.diags(springs)).tocsr()
-    M = assemble_mass(lay, lengths)
-
-    fixed = np.zeros(n_all, dtype=bool)
-    fixed[lay.node_dof[lay.wire_ends.ravel()]] = True
-    fixed[lay.node_dof[lay.messenger_supports]] = True
-    free = np.flatnonzero(~fixed)
-    index = np.full(n_all, -1)
-    index[free] = np.arange(free.size)
+    cable_mass, bar_mass, point_mass = assemble_mass(lay, lengths)
+    scatter = free_matrix_scatter(lay, free)  # K and M share one pattern
+    K = scatter(state.cable_stiffness, bar_stiffness, springs)
+    M = scatter(cable_mass, bar_mass, point_mass)
+    # Drop the stored zeros (the x-z couplings of the mass blocks): the time loop reads every entry.
+    K.eliminate_zeros()
+    M.eliminate_zeros()
 
     rows = np.repeat(np.arange(drop.size), 4)
     cols = index[bdofs].ravel()
@@ -164,8 +170,8 @@ def linearise(static: StaticSolution) -> LinearSystem:
     return LinearSystem(
         static=static,
         free=free,
-        mass=M[free][:, free].tocsr(),
-        stiffness=K[free][:, free].tocsr(),
+        mass=M,
+        stiffness=K,
         alpha=c.damping.alpha,
         beta=c.damping.beta,
         dropper_elongation=B,

@@ -16,7 +16,7 @@ equations are static equilibrium under gravity plus the design constraints:
 * each stitch wire's horizontal tension is imposed by one extra equation.
 
 The coupled system is solved by Newton–Raphson with the analytic tangent (assembled in
-:mod:`catenary_env.assembly`).
+:mod:`catenary_env.assembly`) and a direct solver in track order (:mod:`catenary_env.track_order`).
 """
 
 from __future__ import annotations
@@ -25,11 +25,12 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
-from .assembly import assemble
+from .assembly import Assembled, SparseScatter, assemble, dlength_coordinates, matrix_coordinates
+from .bar import bar_state
 from .design import GRAVITY
 from .layout import CONTACT, MESSENGER, STITCH, Layout
+from .track_order import TrackOrderSolver
 
 
 class ShapeFindingError(RuntimeError):
@@ -89,8 +90,13 @@ class StaticSolution:
 
         lay = self.layout
         n_c = lay.cable_nodes.shape[0]
-        force = axial_force(self.positions[lay.cable_dofs()], self.lengths[:n_c], lay.cable_axial_stiffness, 0.5)
-        return {"contact_wire": force[lay.cable_wire == CONTACT], "messenger_wire": force[lay.cable_wire != CONTACT]}
+        force = axial_force(
+            self.positions[lay.cable_dofs()], self.lengths[:n_c], lay.cable_axial_stiffness, 0.5
+        )
+        return {
+            "contact_wire": force[lay.cable_wire == CONTACT],
+            "messenger_wire": force[lay.cable_wire != CONTACT],
+        }
 
     def infeasibility(self) -> str:
         """Why the design is statically infeasible, or an empty string (SPEC 3.3)."""
@@ -195,34 +201,64 @@ def initial_guess(layout: Layout) -> tuple[np.ndarray, np.ndarray]:
     return X, lengths
 
 
-def _stitch_equations(layout: Layout, X: np.ndarray, lengths: np.ndarray) -> tuple[np.ndarray, sp.csr_matrix]:
-    """Residual (horizontal force of each stitch wire's first bar minus its tension) and its gradient."""
-    from .bar import bar_state
+def _stitch_equations(layout: Layout, X: np.ndarray, lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Residual (horizontal force of each stitch wire's first bar minus its tension) and its gradient.
 
+    Returns
+    -------
+    residual : ndarray (S,)
+        N.
+    gradient : ndarray (S, 5)
+        With respect to the bar's four coordinates (:meth:`Layout.bar_dofs`) and its length, N/m.
+    """
     bars = layout.stitch_bars[:, 0]
-    n_s = bars.size
+    if bars.size == 0:
+        return np.zeros(0), np.zeros((0, 5))
     n_c = layout.cable_nodes.shape[0]
-    n_unknown_len = lengths.size
-    if n_s == 0:
-        return np.zeros(0), sp.csr_matrix((0, layout.n_dofs + n_unknown_len))
     dofs = layout.bar_dofs()[bars]
     bs = bar_state(X[dofs], lengths[n_c + bars], layout.bar_stiffness[bars], layout.bar_axial_stiffness[bars])
     # The force on the bar's far end along x is N n_x, the horizontal tension.
     residual = bs.force[:, 2] - layout.catenary.stitch_wire.tension
-    rows = np.repeat(np.arange(n_s), 5)
-    cols = np.c_[dofs, layout.n_dofs + n_c + bars].ravel()
-    vals = np.c_[bs.stiffness[:, 2, :], bs.force_dlength[:, 2]].ravel()
-    grad = sp.csr_matrix((vals, (rows, cols)), shape=(n_s, layout.n_dofs + n_unknown_len))
-    return residual, grad
+    return residual, np.c_[bs.stiffness[:, 2, :], bs.force_dlength[:, 2]]
 
 
 class ShapeEquations:
-    """The shape-finding system R(y) = 0 over the unknowns y = (free coordinates, reference lengths)."""
+    """The shape-finding system R(y) = 0 over the unknowns y = (free coordinates, reference lengths).
+
+    The Jacobian's sparsity pattern and the linear solver's ordering depend on the layout only, so
+    they are planned once, here, for all Newton iterations.
+    """
 
     def __init__(self, layout: Layout) -> None:
         self.layout = layout
-        self.system = _system(layout)
-        self.n_free = self.system.free.size
+        self.system = system = _system(layout)
+        self.n_free = system.free.size
+        n, n_c = layout.n_dofs, layout.cable_nodes.shape[0]
+        n_unknowns = self.n_free + n_c + layout.bar_nodes.shape[0]
+        # Equation (row) of each coordinate's equilibrium and unknown (column) of each coordinate;
+        # -1 where the equation is dropped or the coordinate prescribed.
+        equation = np.full(n, -1)
+        equation[system.rows] = np.arange(system.rows.size)
+        unknown = np.full(n, -1)
+        unknown[system.free] = np.arange(self.n_free)
+        stitch_bars = layout.stitch_bars[:, 0]
+        stitch_dofs = layout.bar_dofs()[stitch_bars]
+        # The Jacobian's entries: element tangents and length derivatives at their equation (row) and
+        # unknown (column), then the gradients of the stitch equations.
+        m_rows, m_cols = matrix_coordinates(layout)
+        d_rows, d_lengths = dlength_coordinates(layout)
+        stitch_rows = np.repeat(system.rows.size + np.arange(stitch_bars.size), 5)
+        stitch_cols = np.c_[unknown[stitch_dofs], self.n_free + n_c + stitch_bars].ravel()
+        rows = np.r_[equation[m_rows], equation[d_rows], stitch_rows]
+        cols = np.r_[unknown[m_cols], self.n_free + d_lengths, stitch_cols]
+        self._jacobian = SparseScatter(rows, cols, (n_unknowns, n_unknowns), "csc")
+        # Nodes are numbered along the track, so a coordinate's index is its track position; an element's
+        # length and a stitch wire's equation stand at the mean index of their coordinates.
+        self._solver = TrackOrderSolver(
+            self._jacobian.pattern,
+            np.r_[system.rows, stitch_dofs.mean(axis=1)],
+            np.r_[system.free, layout.cable_dofs().mean(axis=1), layout.bar_dofs().mean(axis=1)],
+        )
 
     def unknowns(self, X: np.ndarray, lengths: np.ndarray) -> np.ndarray:
         return np.r_[X[self.system.free], lengths]
@@ -232,23 +268,42 @@ class ShapeEquations:
         X[self.system.free] = y[: self.n_free]
         return X, y[self.n_free :]
 
+    def residual(self, y: np.ndarray) -> tuple[np.ndarray, Assembled]:
+        """Residual (N) at y, and the assembled forces it comes from (for the reactions)."""
+        X, lengths = self.split(y)
+        state = assemble(self.layout, X, lengths, tangent=False)
+        r_st, _ = _stitch_equations(self.layout, X, lengths)
+        return np.r_[(state.force - self.system.external)[self.system.rows], r_st], state
+
+    def jacobian(self, y: np.ndarray) -> sp.csc_matrix:
+        """Analytic Jacobian dR/dy, N/m."""
+        X, lengths = self.split(y)
+        state = assemble(self.layout, X, lengths, tangent=True, dlength=True)
+        _, g_st = _stitch_equations(self.layout, X, lengths)
+        return self._jacobian(
+            state.cable_stiffness, state.bar_stiffness, state.cable_dlength, state.bar_dlength, g_st
+        )
+
     def evaluate(self, y: np.ndarray, jacobian: bool = True) -> tuple[np.ndarray, sp.csc_matrix | None]:
         """Residual (N) and, optionally, its analytic Jacobian with respect to y."""
-        X, lengths = self.split(y)
-        lay, system = self.layout, self.system
-        state = assemble(lay, X, lengths, tangent=jacobian, dlength=jacobian)
-        r_st, g_st = _stitch_equations(lay, X, lengths)
-        r = np.r_[(state.force - system.external)[system.rows], r_st]
-        if not jacobian:
-            return r, None
-        full = sp.hstack([state.stiffness, state.dlength]).tocsr()[system.rows]
-        J = sp.vstack([full, g_st]).tocsc()
-        cols = np.r_[system.free, lay.n_dofs + np.arange(lengths.size)]
-        return r, J[:, cols]
+        return self.residual(y)[0], self.jacobian(y) if jacobian else None
+
+    def solve(self, J: sp.csc_matrix, rhs: np.ndarray) -> np.ndarray:
+        """J⁻¹ rhs, by a direct solve in track order (:mod:`catenary_env.track_order`).
+
+        Raises
+        ------
+        numpy.linalg.LinAlgError
+            When J is singular.
+        """
+        return self._solver.solve(J, rhs)
 
 
 def find_shape(layout: Layout, tolerance: float = 1e-11, max_iterations: int = 30) -> StaticSolution:
     """Solve the shape-finding problem of ``layout`` by Newton–Raphson.
+
+    Each iteration evaluates the Jacobian once and the residual once per tried step; the residual
+    of the accepted step is the next iteration's.
 
     Parameters
     ----------
@@ -267,7 +322,7 @@ def find_shape(layout: Layout, tolerance: float = 1e-11, max_iterations: int = 3
     n_free = equations.n_free
     scale = max(c.contact_wire.tension, c.messenger_wire.tension)
     history: list[float] = []
-    r, J = equations.evaluate(y)
+    r, state = equations.residual(y)
     converged = False
     for _ in range(max_iterations):
         norm = float(np.max(np.abs(r)))
@@ -279,22 +334,22 @@ def find_shape(layout: Layout, tolerance: float = 1e-11, max_iterations: int = 3
             converged = True
             break
         try:
-            step = spla.spsolve(J, -r)
-        except RuntimeError as error:  # singular factor
+            step = equations.solve(equations.jacobian(y), -r)
+        except np.linalg.LinAlgError as error:
             raise ShapeFindingError(
                 f"shape-finding failed: singular tangent ({error}); residual {norm:.3e} N"
             ) from None
-        # Backtrack when a full step raises the residual (far from the solution only).
+        # Backtrack when a full step raises the residual (far from the solution only). The last try
+        # (factor 1/128 < 0.01) is always evaluated, so r and state below belong to the y kept.
         factor = 1.0
         for _ in range(8):
             y_new = y + factor * step
             if np.all(y_new[n_free:] > 0.0) or factor < 0.01:
-                r_new, _ = equations.evaluate(y_new, jacobian=False)
+                r_new, state_new = equations.residual(y_new)
                 if np.all(np.isfinite(r_new)) and np.max(np.abs(r_new)) < 1.5 * norm:
                     break
             factor *= 0.5
-        y = y_new
-        r, J = equations.evaluate(y)
+        y, r, state = y_new, r_new, state_new
     if not converged:
         norm = float(np.max(np.abs(r)))
         history.append(norm)
@@ -305,7 +360,6 @@ def find_shape(layout: Layout, tolerance: float = 1e-11, max_iterations: int = 3
                 f"({norm / scale:.1e} of the largest tension {scale:g} N)"
             )
     X, lengths = equations.split(y)
-    state = assemble(layout, X, lengths, tangent=False)
     reactions = state.force - equations.system.external
     reactions[equations.system.rows] = 0.0
     return StaticSolution(layout, X, lengths, state.bar_force, reactions, tuple(history), scale)

@@ -12,10 +12,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .assembly import assemble
+from .assembly import SparseScatter, assemble, free_matrix_scatter
 from .linear_system import LinearSystem, linearise
 from .shape_finding import ShapeFindingError, StaticSolution
 
@@ -54,12 +53,16 @@ class StiffnessProfile:
 def _uplift_at(
     static: StaticSolution,
     system: LinearSystem,
+    tangent: SparseScatter,
     x: float,
     force: float,
     start: np.ndarray,
     max_iterations: int = 30,
 ) -> tuple[float, np.ndarray]:
-    """Newton solve of the section pushed up by ``force`` at track position ``x``; returns uplift and X."""
+    """Newton solve of the section pushed up by ``force`` at track position ``x``; returns uplift and X.
+
+    ``tangent`` is :func:`free_matrix_scatter` on ``system.free``, planned once for all load points.
+    """
     lay = static.layout
     c = lay.catenary
     free = system.free
@@ -80,8 +83,8 @@ def _uplift_at(
         r = (state.force - reference + springs * (X - X0))[free] - load
         if np.max(np.abs(r)) < tolerance:
             break
-        J = (state.stiffness + sp.diags(springs)).tocsr()[free][:, free]
-        X[free] -= spla.spsolve(J.tocsc(), r)
+        J = tangent(state.cable_stiffness, state.bar_stiffness, springs)
+        X[free] -= spla.spsolve(J, r)
     else:
         raise ShapeFindingError(
             f"uplift solve at x = {x:.2f} m did not converge: residual {np.max(np.abs(r)):.3e} N"
@@ -112,6 +115,7 @@ def stiffness_profile(
     positions = np.linspace(0.0, lay.span_length, n_points)
     uplift = np.empty(n_points)
     X = static.positions
+    tangent = free_matrix_scatter(lay, system.free, "csc")
     for i, s in enumerate(positions):
-        uplift[i], X = _uplift_at(static, system, span * lay.span_length + s, force, X)
+        uplift[i], X = _uplift_at(static, system, tangent, span * lay.span_length + s, force, X)
     return StiffnessProfile(positions, force, uplift, force / uplift, span)

@@ -167,6 +167,24 @@ def test_analytic_jacobian_matches_finite_differences(stitched_catenary):
         assert np.allclose(fd, J[:, column], rtol=1e-5, atol=1e-5 * np.max(np.abs(J)))
 
 
+def test_newton_evaluates_one_jacobian_per_iteration_and_one_residual_per_step(
+    benchmark_catenary, monkeypatch
+):
+    calls = {"residual": 0, "jacobian": 0}
+    for name in calls:
+        method = getattr(ShapeEquations, name)
+
+        def counted(self, y, name=name, method=method):
+            calls[name] += 1
+            return method(self, y)
+
+        monkeypatch.setattr(ShapeEquations, name, counted)
+    static = find_shape(build_layout(benchmark_catenary, level_design(benchmark_catenary), 5, 1.0, 2.0))
+    iterations = len(static.residual_history) - 1
+    # No step is cut back here: the initial residual plus one per step, and the final state is reused.
+    assert calls == {"residual": iterations + 1, "jacobian": iterations}
+
+
 def test_stiffness_is_higher_at_the_supports_than_at_mid_span(benchmark_static):
     profile = stiffness_profile(benchmark_static, force=100.0, n_points=5)
     k = profile.stiffness
