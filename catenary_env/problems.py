@@ -280,8 +280,14 @@ class DesignProblem:
 
     def fingerprint(self) -> str:
         """Hash of the catenary, pantograph and variables: results are reusable only under the same one."""
-        return model_fingerprint(self.catenary_definition, self.pantograph_definition, self.variables,
-                                 self.lower.tolist(), self.upper.tolist(), self.step.tolist())
+        return model_fingerprint(
+            self.catenary_definition,
+            self.pantograph_definition,
+            self.variables,
+            self.lower.tolist(),
+            self.upper.tolist(),
+            self.step.tolist(),
+        )
 
     def reference_evaluation(
         self, speed_kmh: float = 300.0, fidelity: str | Fidelity = "study"

@@ -144,8 +144,14 @@ class GridSpace:
     @classmethod
     def from_problem(cls, problem: GridProblem) -> GridSpace:
         """The grid of a :class:`GridProblem`."""
-        return cls(problem.name, tuple(problem.variable_names), problem.lower, problem.upper, problem.step,
-                   str(getattr(problem, "model_fingerprint", "")))
+        return cls(
+            problem.name,
+            tuple(problem.variable_names),
+            problem.lower,
+            problem.upper,
+            problem.step,
+            str(getattr(problem, "model_fingerprint", "")),
+        )
 
     @property
     def store_key(self) -> str:

@@ -13,7 +13,9 @@ from optimizers.problem import GridSpace, catenary_problem
 def test_fingerprint_is_stable_and_follows_the_data():
     benchmark = load_catenary("benchmark")
     assert model_fingerprint(benchmark) == model_fingerprint(load_catenary("benchmark"))
-    edited = dataclasses.replace(benchmark, contact_wire=dataclasses.replace(benchmark.contact_wire, tension=20000.0))
+    edited = dataclasses.replace(
+        benchmark, contact_wire=dataclasses.replace(benchmark.contact_wire, tension=20000.0)
+    )
     assert edited.name == benchmark.name and model_fingerprint(edited) != model_fingerprint(benchmark)
     # Provenance notes are not model data.
     assert model_fingerprint(dataclasses.replace(benchmark, provenance={})) == model_fingerprint(benchmark)

@@ -119,7 +119,10 @@ def test_benchmark_values() -> None:
     assert c.dropper_positions == (4.5, 10.25, 16.0, 21.75, 27.5, 33.25, 39.0, 44.75, 50.5)
     assert c.contact_wire.tension == 22000.0
     assert (c.messenger_wire.linear_mass, c.messenger_wire.tension, c.messenger_wire.bending_stiffness) == (
-        1.08, 16000.0, 131.7)
+        1.08,
+        16000.0,
+        131.7,
+    )
     assert c.dropper.axial_stiffness == 2e5 and c.dropper.stiffness is None
     assert c.dropper.linear_mass == 0.117
     assert c.supports == type(c.supports)(5e5, 0.0, 2673.58, 1.0)
@@ -136,8 +139,12 @@ def test_stitched_values() -> None:
     assert c.span_length == 65.0
     assert c.dropper_positions == (4.5, 14.0, 23.25, 32.5, 41.75, 51.0, 60.5)
     assert c.stitch_wire is not None
-    assert (c.stitch_wire.length, c.stitch_wire.linear_mass, c.stitch_wire.tension,
-            c.stitch_wire.axial_stiffness) == (18.0, 0.31, 3500.0, 3.5e6)
+    assert (
+        c.stitch_wire.length,
+        c.stitch_wire.linear_mass,
+        c.stitch_wire.tension,
+        c.stitch_wire.axial_stiffness,
+    ) == (18.0, 0.31, 3500.0, 3.5e6)
     assert (c.contact_wire.tension, c.messenger_wire.tension) == (27e3, 21e3)
     assert c.messenger_wire.linear_mass == 1.07
     assert c.system_height == 1.6
@@ -157,40 +164,78 @@ def test_stitched_shares_the_benchmark_droppers_supports_damping_and_contact() -
 # figure models.md does not give, set to zero).
 ASSUMED = {
     ("catenary", "en50318-2002"): [
-        "contact_wire.axial_stiffness", "messenger_wire.axial_stiffness", "dropper.linear_mass",
-        "dropper.clamp_mass_messenger", "dropper.clamp_mass_contact", "system_height", "contact_wire_height",
-        "analysis_spans", "supports.messenger_mass", "supports.steady_arm_mass",
+        "contact_wire.axial_stiffness",
+        "messenger_wire.axial_stiffness",
+        "dropper.linear_mass",
+        "dropper.clamp_mass_messenger",
+        "dropper.clamp_mass_contact",
+        "system_height",
+        "contact_wire_height",
+        "analysis_spans",
+        "supports.messenger_mass",
+        "supports.steady_arm_mass",
     ],
     ("pantograph", "en50318-2002"): ["uplift_force"],
     ("catenary", "benchmark"): [
-        "contact_wire_height", "contact_wire.axial_stiffness", "messenger_wire.axial_stiffness",
-        "supports.steady_arm_mass", "supports.messenger_mass", "damping.alpha", "damping.beta",
-        "contact_stiffness", "n_spans", "analysis_spans",
+        "contact_wire_height",
+        "contact_wire.axial_stiffness",
+        "messenger_wire.axial_stiffness",
+        "supports.steady_arm_mass",
+        "supports.messenger_mass",
+        "damping.alpha",
+        "damping.beta",
+        "contact_stiffness",
+        "n_spans",
+        "analysis_spans",
     ],
     ("pantograph", "benchmark"): ["dampings", "uplift_force"],
     ("catenary", "stitched"): [
-        "span_length", "dropper_positions", "system_height", "contact_wire_height", "contact_stiffness",
-        "n_spans", "analysis_spans", "pantograph",
-        *(f"{wire}.{f}" for wire in ("contact_wire", "messenger_wire")
-          for f in ("linear_mass", "tension", "bending_stiffness", "axial_stiffness")),
+        "span_length",
+        "dropper_positions",
+        "system_height",
+        "contact_wire_height",
+        "contact_stiffness",
+        "n_spans",
+        "analysis_spans",
+        "pantograph",
+        *(
+            f"{wire}.{f}"
+            for wire in ("contact_wire", "messenger_wire")
+            for f in ("linear_mass", "tension", "bending_stiffness", "axial_stiffness")
+        ),
         *(f"stitch_wire.{f}" for f in ("length", "linear_mass", "tension", "axial_stiffness")),
-        *(f"dropper.{f}" for f in ("axial_stiffness", "linear_mass", "clamp_mass_messenger",
-                                    "clamp_mass_contact")),
-        *(f"supports.{f}" for f in ("messenger_stiffness", "messenger_mass", "steady_arm_stiffness",
-                                     "steady_arm_mass")),
-        "damping.alpha", "damping.beta",
+        *(
+            f"dropper.{f}"
+            for f in ("axial_stiffness", "linear_mass", "clamp_mass_messenger", "clamp_mass_contact")
+        ),
+        *(
+            f"supports.{f}"
+            for f in ("messenger_stiffness", "messenger_mass", "steady_arm_stiffness", "steady_arm_mass")
+        ),
+        "damping.alpha",
+        "damping.beta",
     ],
 }
 
 # A sample of the [S] and [S?] figures.
 SOURCED = {
-    ("catenary", "en50318-2002"): {"span_length": "S", "dropper.stiffness": "S", "contact_wire.tension": "S",
-                                   "supports.steady_arm_stiffness": "S", "damping.alpha": "S",
-                                   "n_spans": "S"},
+    ("catenary", "en50318-2002"): {
+        "span_length": "S",
+        "dropper.stiffness": "S",
+        "contact_wire.tension": "S",
+        "supports.steady_arm_stiffness": "S",
+        "damping.alpha": "S",
+        "n_spans": "S",
+    },
     ("pantograph", "en50318-2002"): {"masses": "S?", "stiffnesses": "S?", "dampings": "S?"},
-    ("catenary", "benchmark"): {"span_length": "S?", "dropper_positions": "S?", "system_height": "S?",
-                                "dropper.axial_stiffness": "S?", "supports.steady_arm_stiffness": "S?",
-                                "messenger_wire.linear_mass": "S?"},
+    ("catenary", "benchmark"): {
+        "span_length": "S?",
+        "dropper_positions": "S?",
+        "system_height": "S?",
+        "dropper.axial_stiffness": "S?",
+        "supports.steady_arm_stiffness": "S?",
+        "messenger_wire.linear_mass": "S?",
+    },
     ("pantograph", "benchmark"): {"masses": "S?", "stiffnesses": "S?"},
 }
 
@@ -231,22 +276,23 @@ def test_every_figure_of_a_preset_has_a_provenance_entry(kind: str, name: str) -
 
 
 def test_provenance_key_that_names_no_field_is_refused(tmp_path: Path) -> None:
-    path = _copy_with(tmp_path, "catenary", "benchmark",
-                      ('"contact_wire.tension" =', '"contact_wire.tensoin" ='))
+    path = _copy_with(
+        tmp_path, "catenary", "benchmark", ('"contact_wire.tension" =', '"contact_wire.tensoin" =')
+    )
     with pytest.raises(DefinitionError, match=r'provenance\."contact_wire\.tensoin": names no field'):
         load_catenary(path)
 
 
 def test_provenance_tag_must_start_with_s_s_or_a(tmp_path: Path) -> None:
-    path = _copy_with(tmp_path, "pantograph", "benchmark",
-                      ('"masses" = "S?: single source"', '"masses" = "measured"'))
+    path = _copy_with(
+        tmp_path, "pantograph", "benchmark", ('"masses" = "S?: single source"', '"masses" = "measured"')
+    )
     with pytest.raises(DefinitionError, match=r'provenance\."masses" = \'measured\''):
         load_pantograph(path)
 
 
 def test_provenance_accepts_indexed_and_unquoted_dotted_keys(tmp_path: Path) -> None:
-    path = _copy_with(tmp_path, "pantograph", "benchmark",
-                      ('"dampings" = "A:', '"dampings[0]" = "A:'))
+    path = _copy_with(tmp_path, "pantograph", "benchmark", ('"dampings" = "A:', '"dampings[0]" = "A:'))
     assert _tag(load_pantograph(path).provenance["dampings[0]"]) == "A"
     path = _copy_with(tmp_path, "catenary", "benchmark", ('"damping.beta" =', "damping.beta ="))
     assert _tag(load_catenary(path).provenance["damping.beta"]) == "A"
@@ -260,8 +306,13 @@ def test_provenance_accepts_indexed_and_unquoted_dotted_keys(tmp_path: Path) -> 
 
 
 def test_an_edited_copy_loads_with_the_new_value(tmp_path: Path) -> None:
-    path = _copy_with(tmp_path, "catenary", "benchmark", ("tension = 22000.0", "tension = 25000.0"),
-                      ('name = "benchmark"', 'name = "my-benchmark"'))
+    path = _copy_with(
+        tmp_path,
+        "catenary",
+        "benchmark",
+        ("tension = 22000.0", "tension = 25000.0"),
+        ('name = "benchmark"', 'name = "my-benchmark"'),
+    )
     catenary = load_catenary(str(path))
     assert catenary.name == "my-benchmark"
     assert catenary.contact_wire.tension == 25000.0
@@ -269,15 +320,20 @@ def test_an_edited_copy_loads_with_the_new_value(tmp_path: Path) -> None:
 
 
 def test_an_edited_pantograph_copy_loads_with_the_new_value(tmp_path: Path) -> None:
-    path = _copy_with(tmp_path, "pantograph", "benchmark", ("# To fix it instead, add:  uplift_force = <N>",
-                                                             "uplift_force = 160.0"))
+    path = _copy_with(
+        tmp_path,
+        "pantograph",
+        "benchmark",
+        ("# To fix it instead, add:  uplift_force = <N>", "uplift_force = 160.0"),
+    )
     assert load_pantograph(path).uplift_force == 160.0
 
 
 def test_a_relative_pantograph_path_resolves_next_to_the_catenary_file(tmp_path: Path) -> None:
     shutil.copy(preset_path("pantograph", "benchmark"), tmp_path / "my-pantograph.toml")
-    path = _copy_with(tmp_path, "catenary", "benchmark",
-                      ('pantograph = "benchmark"', 'pantograph = "my-pantograph.toml"'))
+    path = _copy_with(
+        tmp_path, "catenary", "benchmark", ('pantograph = "benchmark"', 'pantograph = "my-pantograph.toml"')
+    )
     catenary = load_catenary(path)
     assert Path(catenary.pantograph) == (tmp_path / "my-pantograph.toml").resolve()
     assert load_pantograph(catenary.pantograph) == load_pantograph("benchmark")
@@ -297,23 +353,33 @@ def test_a_relative_pantograph_path_resolves_next_to_the_catenary_file(tmp_path:
         (("[4.5, 10.25", "[-1.0, 10.25"), r"dropper_positions\[0\] = -1\.0: must lie in \(0, 55\.0\)"),
         (("44.75, 50.5]", "44.75, 56.0]"), r"dropper_positions\[8\] = 56\.0: must lie in \(0, 55\.0\)"),
         (("10.25, 16.0,", "16.0, 10.25,"), r"dropper_positions\[2\] = 10\.25: droppers must not cross"),
-        (("tension = 22000.0", "tensoin = 22000.0"),
-         r"contact_wire\.tensoin: unknown field \(did you mean 'tension'\?\); allowed: axial_stiffness, "),
+        (
+            ("tension = 22000.0", "tensoin = 22000.0"),
+            r"contact_wire\.tensoin: unknown field \(did you mean 'tension'\?\); allowed: axial_stiffness, ",
+        ),
         (("[supports]", "[suports]"), r"suports: unknown field"),
         (("tension = 22000.0 ", "# tension = 22000.0 "), r"contact_wire\.tension: missing required field"),
         (('name = "benchmark"\n', ""), r"name: missing required field"),
-        (("tension = 22000.0", 'tension = "22 kN"'),
-         r"contact_wire\.tension = '22 kN': expected a number, got a string"),
+        (
+            ("tension = 22000.0", 'tension = "22 kN"'),
+            r"contact_wire\.tension = '22 kN': expected a number, got a string",
+        ),
         (("n_spans = 20", "n_spans = 20.0"), r"n_spans = 20\.0: expected an integer, got a float"),
         (("n_spans = 20", "n_spans = true"), r"n_spans = True: expected an integer, got a boolean"),
         (("n_spans = 20", "n_spans = 2"), r"n_spans = 2: must be an integer in \[3, 200\]"),
         (("[4.5, 10.25", '["4.5", 10.25'), r"dropper_positions\[0\] = '4\.5': expected a number"),
-        (("axial_stiffness = 2.0e5", "stiffness = 2.0e5\naxial_stiffness = 2.0e5"),
-         r"dropper: give exactly one of 'stiffness'"),
-        (('pantograph = "benchmark"', 'pantograph = "pantograph-x"'),
-         r"pantograph = 'pantograph-x': unknown pantograph preset; available: benchmark, en50318-2002"),
-        (("span_length = 55.0", "span_length = [55.0]"),
-         r"span_length = \[55\.0\]: expected a number, got an array"),
+        (
+            ("axial_stiffness = 2.0e5", "stiffness = 2.0e5\naxial_stiffness = 2.0e5"),
+            r"dropper: give exactly one of 'stiffness'",
+        ),
+        (
+            ('pantograph = "benchmark"', 'pantograph = "pantograph-x"'),
+            r"pantograph = 'pantograph-x': unknown pantograph preset; available: benchmark, en50318-2002",
+        ),
+        (
+            ("span_length = 55.0", "span_length = [55.0]"),
+            r"span_length = \[55\.0\]: expected a number, got an array",
+        ),
     ],
 )
 def test_invalid_catenary_is_refused_naming_the_file_and_field(
@@ -350,8 +416,10 @@ def test_invalid_stitch_wire_is_refused(tmp_path: Path) -> None:
         (("masses = [6.0, 9.0, 7.5]", "masses = [6.0, 9.0]"), r"stiffnesses: must have 2 values"),
         (("[160.0, 15500.0, 7000.0]", "[160.0, -15500.0, 7000.0]"), r"stiffnesses\[1\] = -15500\.0"),
         (("masses = [6.0, 9.0, 7.5]", "masses = [6.0, 9.0, -7.5]"), r"masses\[2\] = -7\.5"),
-        (("dampings = [100.0, 0.0, 0.0]", "damping = [100.0, 0.0, 0.0]"),
-         r"damping: unknown field \(did you mean 'dampings'\?\)"),
+        (
+            ("dampings = [100.0, 0.0, 0.0]", "damping = [100.0, 0.0, 0.0]"),
+            r"damping: unknown field \(did you mean 'dampings'\?\)",
+        ),
         (("# To fix it instead, add:  uplift_force = <N>", "uplift_force = -1.0"), r"uplift_force = -1\.0"),
     ],
 )
@@ -365,8 +433,11 @@ def test_invalid_pantograph_is_refused_naming_the_file_and_field(
 
 
 def test_unknown_preset_name_lists_the_available_ones() -> None:
-    with pytest.raises(DefinitionError, match=r"unknown catenary preset 'benchmrk'; available: benchmark, "
-                                              r"en50318-2002, stitched"):
+    with pytest.raises(
+        DefinitionError,
+        match=r"unknown catenary preset 'benchmrk'; available: benchmark, "
+        r"en50318-2002, stitched",
+    ):
         load_catenary("benchmrk")
     with pytest.raises(DefinitionError, match=r"unknown pantograph preset 'x'; available: benchmark, en"):
         load_pantograph("x")

@@ -78,8 +78,9 @@ def render_design(
     wrapped = [part for line in lines for part in textwrap.wrap(line, TEXT_WIDTH, subsequent_indent="  ")]
     figure.text(0.02, 0.01, "\n".join(wrapped), va="bottom", family="monospace", fontsize=8)
     geometry.set_title(title, fontsize=10)
-    figure.subplots_adjust(left=0.09, right=0.98, top=0.93, bottom=0.04 + 0.017 * len(wrapped) + 0.06,
-                           hspace=0.45)
+    figure.subplots_adjust(
+        left=0.09, right=0.98, top=0.93, bottom=0.04 + 0.017 * len(wrapped) + 0.06, hspace=0.45
+    )
     canvas.draw()
     image = np.asarray(canvas.buffer_rgba())[:, :, :3]
     return np.array(image, dtype=np.uint8)  # a copy: the canvas's buffer dies with the figure

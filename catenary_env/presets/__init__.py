@@ -312,8 +312,14 @@ def _scalar(value: Any, hint: Any, dotted: str) -> Any:
 
 def _kind(value: Any) -> str:
     """The TOML name of a value's type, for error messages."""
-    for python_type, name in ((bool, "a boolean"), (int, "an integer"), (float, "a float"), (str, "a string"),
-                              (list, "an array"), (dict, "a table")):
+    for python_type, name in (
+        (bool, "a boolean"),
+        (int, "an integer"),
+        (float, "a float"),
+        (str, "a string"),
+        (list, "an array"),
+        (dict, "a table"),
+    ):
         if isinstance(value, python_type):
             return name
     return "a date/time"
