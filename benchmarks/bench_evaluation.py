@@ -133,6 +133,41 @@ def backend_comparison(
     }
 
 
+def solve_floor(preset: str, n_spans: int, fidelity: Fidelity, calls: int = 200) -> dict[str, float] | None:
+    """The compiled banded solve alone, µs per call (best of several batches), and the passage it implies.
+
+    Every step of the exact method solves the whole section once, so this is a floor under the
+    passage's time per step, whatever else the loop does. None without numba.
+    """
+    from catenary_env.dynamics import _compiled_kernels
+
+    kernels = _compiled_kernels()
+    if kernels is None:
+        return None
+    catenary = load_catenary(preset)
+    layout = build_layout(
+        catenary,
+        level_design(catenary),
+        n_spans,
+        fidelity.contact_wire_element,
+        fidelity.messenger_wire_element,
+    )
+    factor = prepare_passage(linearise(find_shape(layout)), fidelity.time_step).factor
+    w = kernels.padded_width(factor.bandwidth)
+    unit = kernels.unit_factor(factor.factor, w)
+    n = factor.factor.shape[1]
+    b, sweep = np.zeros(n + w), np.zeros(n + w)
+    b[:n] = np.random.default_rng(0).standard_normal(n)
+    kernels.solve(*unit, b, sweep, (0,) * w)
+    best = np.inf
+    for _ in range(10):  # the best batch: the machine's other load only ever adds time
+        t = time.perf_counter()
+        for _ in range(calls // 10):
+            kernels.solve(*unit, b, sweep, (0,) * w)
+        best = min(best, (time.perf_counter() - t) / (calls // 10))
+    return {"solve_per_step_us": 1e6 * best, "factor_mib": 2 * unit.upper.nbytes / 2**20}
+
+
 def _evaluate_presag(
     preset: str, presag: float, speed_kmh: float, uplift: float, fidelity: Fidelity
 ) -> float:
@@ -276,6 +311,10 @@ def main() -> int:
         comparison = backend_comparison(
             args.preset, args.main_spans, args.speed, args.uplift, fidelity, args.numpy_runs
         )
+    floor = solve_floor(args.preset, args.main_spans, fidelity)
+    if floor is not None:
+        steps = main["steps"] - 1
+        floor["passage_floor_s"] = floor["solve_per_step_us"] * 1e-6 * steps
     batch = None
     if args.batch > 0:
         batch_fidelity = Fidelity(n_spans=args.main_spans, analysis_spans=max(1, args.main_spans // 2))
@@ -311,6 +350,7 @@ def main() -> int:
             for n in spans
         },
         "backends": comparison,
+        "solve_floor": floor,
         "batch": batch,
     }
     if args.json:
@@ -337,6 +377,13 @@ def main() -> int:
             f"numpy {comparison['numpy_passage_median_s']:.2f} s, "
             f"numba / numpy = {comparison['numba_over_numpy']:.3f} ({comparison['speed_up']:.1f}x), "
             f"max |ΔF| = {comparison['max_contact_force_difference_n']:.1e} N"
+        )
+    if floor is not None:
+        print(
+            f"banded solve alone ({floor['factor_mib']:.1f} MiB of factor read per step): "
+            f"{floor['solve_per_step_us']:.0f} µs/step at best, "
+            f"{floor['passage_floor_s']:.2f} s over the {args.main_spans}-span passage: "
+            "the floor of any method that solves the whole section every step"
         )
     for n_workers, b in (batch or {}).items():
         print(
