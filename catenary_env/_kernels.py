@@ -84,7 +84,7 @@ class PassageArrays(NamedTuple):
     coefficients : ndarray (16,)
         e1, e2, e3, g1, g2, g3, a0, a1, a2, a3, a4, a5, k_h, Rayleigh β, 0, 0: the step's
         right-hand side is M (e1 u + e2 v + e3 a) and y / c_k = g1 u + g2 v + g3 a
-        (:func:`step_coefficients`).
+        (built in :func:`catenary_env.dynamics._kernel_arrays`).
     """
 
     upper: np.ndarray
