@@ -15,13 +15,12 @@ pass over the DOFs. What the profile asked for, beyond compiling:
   one product with the (sparser, constant) mass matrix per step instead of one with M and K.
 - The factor is stored with a unit diagonal, K̂ = Ûᵀ D² Û: the forward sweep Ûᵀ z = b and the
   backward sweep Û x = D⁻² z need no division. Each sweep is a row-by-row dot product with the
-  w unknowns found last, which are summed oldest first and the newest four kept in registers, so
-  the chain of dependent operations from one row to the next is a single FMA (a triangular solve
-  is latency-bound; summing the newest first, or letting LLVM reassociate, makes it 16 FMAs). The
-  forward sweep reads a second copy of Û by columns, stored in reverse row order so that every
-  index is the row plus a positive offset (numba tests a signed index for wrap-around, which
-  costs as much as the arithmetic). w is a compile-time constant, the length of the tuple
-  ``width`` (one compiled version per band width, rounded up to WIDTH_STEP): LLVM unrolls the sums.
+  w unknowns found last, summed oldest first with the newest four kept in registers, so that the
+  newest unknown reaches the next one through a single FMA (letting LLVM reassociate put the
+  newest far unknown first in a chain of 16 FMAs, twice as slow). The forward sweep reads a second
+  copy of Û by columns, in reverse row order so that its indices are the row plus a positive
+  offset (see below). w is a compile-time constant, the length of the tuple ``width`` (one
+  compiled version per band width, rounded up to WIDTH_STEP): LLVM unrolls the sums.
 - A unit force's response K̂⁻¹ e decays away from the force (K̂ is dominated by M / (β Δt²)):
   below 1e-30 of its peak within some 1,500 to 3,000 DOFs on the study mesh (the axial waves decay
   slowest), a fifth of the 20-span section. The contact element's unit responses are computed,
