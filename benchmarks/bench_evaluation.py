@@ -39,9 +39,10 @@ from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from catenary_env.definition import CatenaryDefinition  # noqa: E402
 from catenary_env.design import level_design, presag_design  # noqa: E402
 from catenary_env.dynamics import prepare_passage, simulate_passage  # noqa: E402
-from catenary_env.layout import build_layout  # noqa: E402
+from catenary_env.layout import Layout, build_layout  # noqa: E402
 from catenary_env.linear_system import linearise  # noqa: E402
 from catenary_env.presets import load_catenary, load_pantograph  # noqa: E402
 from catenary_env.shape_finding import find_shape  # noqa: E402
@@ -49,6 +50,17 @@ from catenary_env.simulation import Fidelity, analysis_window, evaluate  # noqa:
 from catenary_env.statistics import passage_statistics  # noqa: E402
 
 PHASES = ("shape_finding", "linearisation", "factorisation", "passage", "statistics")
+
+
+def level_layout(catenary: CatenaryDefinition, n_spans: int, fidelity: Fidelity) -> Layout:
+    """The level design's layout on ``fidelity``'s mesh."""
+    return build_layout(
+        catenary,
+        level_design(catenary),
+        n_spans,
+        fidelity.contact_wire_element,
+        fidelity.messenger_wire_element,
+    )
 
 
 def one_evaluation(
@@ -59,14 +71,7 @@ def one_evaluation(
     pantograph = load_pantograph(catenary.pantograph)
     times: dict[str, float] = {}
     t = time.perf_counter()
-    layout = build_layout(
-        catenary,
-        level_design(catenary),
-        n_spans,
-        fidelity.contact_wire_element,
-        fidelity.messenger_wire_element,
-    )
-    static = find_shape(layout)
+    static = find_shape(level_layout(catenary, n_spans, fidelity))
     times["shape_finding"] = time.perf_counter() - t
     t = time.perf_counter()
     system = linearise(static)
@@ -97,14 +102,7 @@ def backend_comparison(
     """Passage times of both backends on one prepared system, alternately; medians and their ratio."""
     catenary = load_catenary(preset)
     pantograph = load_pantograph(catenary.pantograph)
-    layout = build_layout(
-        catenary,
-        level_design(catenary),
-        n_spans,
-        fidelity.contact_wire_element,
-        fidelity.messenger_wire_element,
-    )
-    system = linearise(find_shape(layout))
+    system = linearise(find_shape(level_layout(catenary, n_spans, fidelity)))
     prepared = prepare_passage(system, fidelity.time_step)
     times: dict[str, list[float]] = {"numba": [], "numpy": []}
     forces = {}
@@ -144,15 +142,8 @@ def solve_floor(preset: str, n_spans: int, fidelity: Fidelity, calls: int = 200)
     kernels = _compiled_kernels()
     if kernels is None:
         return None
-    catenary = load_catenary(preset)
-    layout = build_layout(
-        catenary,
-        level_design(catenary),
-        n_spans,
-        fidelity.contact_wire_element,
-        fidelity.messenger_wire_element,
-    )
-    factor = prepare_passage(linearise(find_shape(layout)), fidelity.time_step).factor
+    system = linearise(find_shape(level_layout(load_catenary(preset), n_spans, fidelity)))
+    factor = prepare_passage(system, fidelity.time_step).factor
     w = kernels.padded_width(factor.bandwidth)
     unit = kernels.unit_factor(factor.factor, w)
     n = factor.factor.shape[1]
