@@ -1,4 +1,4 @@
-"""Benchmark: one full evaluation of a catenary design (SPEC 9).
+"""Benchmark: one full evaluation of a catenary design (docs/performance.md, 'Benchmark').
 
 Shape-finding, linearisation, factorisation (with the unit dropper responses), the pantograph
 passage and the statistics of the "benchmark" preset at 300 km/h, Δt = 1 ms, on the study mesh.
@@ -39,15 +39,15 @@ from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from catenary_env.definition import CatenaryDefinition  # noqa: E402
-from catenary_env.design import level_design, presag_design  # noqa: E402
-from catenary_env.dynamics import prepare_passage, simulate_passage  # noqa: E402
-from catenary_env.layout import Layout, build_layout  # noqa: E402
-from catenary_env.linear_system import linearise  # noqa: E402
-from catenary_env.presets import load_catenary, load_pantograph  # noqa: E402
-from catenary_env.shape_finding import find_shape  # noqa: E402
-from catenary_env.simulation import Fidelity, analysis_window, evaluate  # noqa: E402
-from catenary_env.statistics import passage_statistics  # noqa: E402
+from catenary_env.analysis.statistics import passage_statistics  # noqa: E402
+from catenary_env.dynamics.linear_system import linearise  # noqa: E402
+from catenary_env.dynamics.passage import prepare_passage, simulate_passage  # noqa: E402
+from catenary_env.fem.layout import Layout, build_layout  # noqa: E402
+from catenary_env.model.definition import CatenaryDefinition  # noqa: E402
+from catenary_env.model.design import level_design, presag_design  # noqa: E402
+from catenary_env.model.presets import load_catenary, load_pantograph  # noqa: E402
+from catenary_env.pipeline import Fidelity, analysis_window, evaluate  # noqa: E402
+from catenary_env.statics.shape_finding import find_shape  # noqa: E402
 
 PHASES = ("shape_finding", "linearisation", "factorisation", "passage", "statistics")
 
@@ -137,7 +137,7 @@ def solve_floor(preset: str, n_spans: int, fidelity: Fidelity, calls: int = 200)
     Every step of the exact method solves the whole section once, so this is a floor under the
     passage's time per step, whatever else the loop does. None without numba.
     """
-    from catenary_env.dynamics import _compiled_kernels
+    from catenary_env.dynamics.passage import _compiled_kernels
 
     kernels = _compiled_kernels()
     if kernels is None:

@@ -1,4 +1,4 @@
-"""The ``catenary`` command line (SPEC 10).
+"""The ``catenary`` command line (README.md, 'Command line').
 
     catenary static PRESET [--presag S | --offsets ...] [--json] [--plot FILE]
     catenary simulate PRESET --speed KMH [...] [--json] [--plot FILE]
@@ -15,16 +15,17 @@ Bad input exits with status 2 and a message naming the field and its range, befo
 from __future__ import annotations
 
 import argparse
+import importlib.metadata
 import json
 import shutil
 import sys
 import time
 from collections.abc import Callable, Sequence
 
-from .definition import CatenaryDefinition, DefinitionError
-from .design import Design, check_design, check_speed, level_design, presag_design
-from .presets import catenary_names, load_catenary, load_pantograph, pantograph_names, preset_path
-from .simulation import (
+from .model.definition import CatenaryDefinition, DefinitionError
+from .model.design import Design, check_design, check_speed, level_design, presag_design
+from .model.presets import catenary_names, load_catenary, load_pantograph, pantograph_names, preset_path
+from .pipeline import (
     FIDELITIES,
     Fidelity,
     calibrate_uplift,
@@ -133,7 +134,7 @@ def _save(fig, path: str) -> None:  # noqa: ANN001
 
 
 def cmd_static(args: argparse.Namespace) -> int:
-    from .static_analysis import stiffness_profile
+    from .analysis.static_analysis import stiffness_profile
 
     catenary = load_catenary(args.preset)
     design = _design(catenary, args)
@@ -336,28 +337,38 @@ def cmd_presets(args: argparse.Namespace) -> int:
     return 0
 
 
-def _optional_commands(sub: argparse._SubParsersAction) -> dict[str, Callable[[argparse.Namespace], int]]:
-    """Commands that live at the package's edges (environments, optimisers, experiments)."""
-    handlers: dict[str, Callable[[argparse.Namespace], int]] = {}
+COMMANDS_GROUP = "catenary_env.commands"
+"""Entry-point group of the packages that add sub-commands to ``catenary`` (``optimize``, ``experiment``).
+
+An entry point names a function ``add_commands(subparsers) -> {command: handler}``; the packages built
+on the simulator plug in this way, so the simulator never imports them."""
+
+Handler = Callable[[argparse.Namespace], int]
+
+
+def _plugin_commands(sub: argparse._SubParsersAction) -> dict[str, Handler]:
+    """The commands of the ``catenary_env.commands`` entry points; one that fails to load says so."""
+    handlers: dict[str, Handler] = {}
+    for entry in sorted(importlib.metadata.entry_points(group=COMMANDS_GROUP), key=lambda e: e.name):
+        try:
+            add_commands = entry.load()
+        except Exception as error:  # a broken plug-in must not take the simulator's commands down
+            print(
+                f"catenary: the '{entry.name}' commands are unavailable: {entry.value} failed to load "
+                f"({type(error).__name__}: {error})",
+                file=sys.stderr,
+            )
+            continue
+        handlers.update(add_commands(sub))
+    return handlers
+
+
+def _optional_commands(sub: argparse._SubParsersAction) -> dict[str, Handler]:
+    """Commands at the package's edges: ``evaluate`` (the design problems) and the plug-ins' commands."""
     from . import cli_evaluate
 
     cli_evaluate.add_parser(sub)
-    handlers["evaluate"] = cli_evaluate.run
-    try:
-        from optimizers import cli as optimize_cli
-    except ImportError:  # pragma: no cover - the optimizers package ships beside catenary_env
-        optimize_cli = None
-    if optimize_cli is not None:
-        optimize_cli.add_parser(sub)
-        handlers["optimize"] = optimize_cli.run
-    try:
-        from experiments import cli as experiment_cli
-    except ImportError:  # pragma: no cover - experiments run from a source checkout
-        experiment_cli = None
-    if experiment_cli is not None:
-        experiment_cli.add_parsers(sub)
-        handlers.update(experiment_cli.HANDLERS)
-    return handlers
+    return {"evaluate": cli_evaluate.run, **_plugin_commands(sub)}
 
 
 def build_parser() -> tuple[argparse.ArgumentParser, dict[str, Callable[[argparse.Namespace], int]]]:
@@ -387,7 +398,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, Callable[[argpars
     )
     handlers["static"] = cmd_static
 
-    p = sub.add_parser("simulate", help="pantograph passage: contact-force statistics (SPEC 3.7)")
+    p = sub.add_parser("simulate", help="pantograph passage: contact-force statistics")
     p.add_argument("preset", help=f"catenary preset ({', '.join(catenary_names())}) or a .toml file")
     p.add_argument("--speed", type=float, required=True, help="train speed, km/h")
     p.add_argument("--pantograph", help="pantograph preset or .toml file (default: the catenary's)")

@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from .design import check_speed
+from .model.design import check_speed
+from .pipeline import FIDELITIES, Evaluation
 from .problems import PROBLEMS, DesignProblem
-from .simulation import FIDELITIES, Evaluation
 
 EXIT_OK = 0
 EXIT_USAGE = 2
@@ -31,8 +31,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "evaluate",
         help="simulate one design of a design problem and print its contact-force statistics",
-        description="Simulate one design of a design problem (SPEC 4) at one speed and print its feasibility "
-        "and contact-force statistics. The pantograph's uplift force is set on the problem's "
+        description="Simulate one design of a design problem (docs/problems.md) at one speed and print its "
+        "feasibility and contact-force statistics. The pantograph's uplift force is set on the problem's "
         "reference design so that its mean contact force meets EN 50367 at the speed.",
         epilog=f"Variables, in order: {table}.",
     )

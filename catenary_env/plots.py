@@ -1,4 +1,5 @@
-"""Plots a catenary engineer expects (SPEC 10): geometry, contact force, stiffness, dropper forces.
+"""Plots a catenary engineer expects (README.md, 'Command line'): geometry, contact force, stiffness, dropper
+forces.
 
 matplotlib is optional: it is imported where used, with the install command in the error.
 Every function draws on a given Axes and returns it, so figures can be composed.
@@ -10,13 +11,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .layout import CONTACT, MESSENGER, STITCH
-from .shape_finding import StaticSolution
-from .statistics import lowpass
+from .fem.layout import CONTACT, MESSENGER, STITCH
+from .statics.shape_finding import StaticSolution
 
 if TYPE_CHECKING:
-    from .simulation import Simulation
-    from .static_analysis import StiffnessProfile
+    from .analysis.static_analysis import StiffnessProfile
+    from .pipeline import Simulation
 
 
 def pyplot() -> Any:
@@ -77,9 +77,8 @@ def contact_wire_height(static: StaticSolution, ax: Any, span: int | None = None
 def contact_force(simulation: Simulation, ax: Any) -> Any:
     """Raw and 20 Hz filtered contact force along the track, with the analysis section shaded."""
     tr = simulation.trajectory
-    dt = tr.time[1] - tr.time[0]
     ax.plot(tr.position, tr.contact_force, color="0.7", lw=0.6, label="raw")
-    ax.plot(tr.position, lowpass(tr.contact_force, dt), "C0-", lw=1.0, label="filtered 20 Hz")
+    ax.plot(tr.position, simulation.filtered_force, "C0-", lw=1.0, label="filtered 20 Hz")
     ax.axvspan(*simulation.window, color="C2", alpha=0.08, label="analysis section")
     s = simulation.statistics
     ax.axhline(s.mean, color="C3", lw=0.8, ls="--", label=f"Fm = {s.mean:.1f} N, σ = {s.std:.1f} N")

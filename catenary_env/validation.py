@@ -1,6 +1,6 @@
 """Validation against EN 50318:2002: the reference model's results against the accepted ranges.
 
-The ranges are data (``presets/validation/en50318-2002.toml``); the model is the "en50318-2002"
+The ranges are data (``model/presets/validation/en50318-2002.toml``); the model is the "en50318-2002"
 catenary and pantograph presets, simulated as given. Nothing is tuned to land in a range: a
 quantity outside its range is reported as such, with the margin.
 """
@@ -11,11 +11,11 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from .design import level_design
-from .presets import load_catenary, load_pantograph
-from .simulation import Fidelity, simulate
+from .model.design import level_design
+from .model.presets import load_catenary, load_pantograph
+from .pipeline import Fidelity, simulate
 
-VALIDATION_DIR = Path(__file__).parent / "presets" / "validation"
+VALIDATION_DIR = Path(__file__).parent / "model" / "presets" / "validation"
 
 QUANTITIES = (
     "mean",
@@ -37,7 +37,7 @@ class ValidationRow:
     ----------
     speed_kmh : float
     quantity : str
-        A field of :class:`~catenary_env.statistics.ContactStatistics`.
+        A field of :class:`~catenary_env.analysis.statistics.ContactStatistics`.
     value : float
         Simulated value (N; m for the uplift; % for contact loss).
     low, high : float

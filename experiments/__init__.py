@@ -1,4 +1,5 @@
-"""Studies of SPEC 7: thin ``main(config)`` scripts that write tidy data files; plots read only those files.
+"""Studies (docs/problems.md, 'Experiments'): thin ``main(config)`` scripts that write tidy data files; plots
+read only those files.
 
 Run one with ``catenary experiment NAME [--full]`` or ``python -m experiments.NAME``; re-plot everything from
 the data with ``catenary report``.

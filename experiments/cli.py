@@ -17,7 +17,9 @@ STUDIES = {
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("experiment", help="run a study of SPEC 7; writes data (CSV) and figures")
+    p = sub.add_parser(
+        "experiment", help="run a study (docs/problems.md, 'Experiments'); writes data (CSV) and figures"
+    )
     p.add_argument("name", choices=sorted(STUDIES), help="; ".join(f"{k}: {v}" for k, v in STUDIES.items()))
     p.add_argument(
         "--full",
@@ -57,3 +59,9 @@ HANDLERS: dict[str, Callable[[argparse.Namespace], int]] = {
     "experiment": run_experiment,
     "report": run_report,
 }
+
+
+def add_commands(sub: argparse._SubParsersAction) -> dict[str, Callable[[argparse.Namespace], int]]:
+    """Add ``catenary experiment`` and ``catenary report``: the ``catenary_env.commands`` entry point."""
+    add_parsers(sub)
+    return dict(HANDLERS)

@@ -1,4 +1,4 @@
-"""Mesh and time-step convergence of σ on the benchmark preset at 300 km/h (SPEC 3.2, 8).
+"""Mesh and time-step convergence of σ on the benchmark preset at 300 km/h (docs/model.md, 'Verification').
 
 Quick: a 5-span section; full: the study's 20 spans (10 analysed). Rows: the element length of the
 contact wire (the messenger's is twice it) and the time step, σ and the change against the finest.
@@ -13,9 +13,9 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from catenary_env.design import level_design
-from catenary_env.presets import load_catenary, load_pantograph
-from catenary_env.simulation import Fidelity, simulate
+from catenary_env.model.design import level_design
+from catenary_env.model.presets import load_catenary, load_pantograph
+from catenary_env.pipeline import Fidelity, simulate
 
 from .common import DEFAULT_OUT, markdown_table, read_csv, study_dir, write_csv
 

@@ -1,9 +1,10 @@
-"""Study 2: σ against pre-sag on both catenaries at 300 km/h, and the best pre-sag against speed (SPEC 7.2).
+"""Study 2: σ against pre-sag on both catenaries at 300 km/h, and the best pre-sag against speed
+(docs/problems.md, 'Experiments').
 
-The design problems BPresag and SWPresag: a parabolic contact-wire pre-sag s (m at mid-span). The
-pantograph's uplift is set once per catenary and speed on the level reference design (SPEC 3.5).
-Quick: the "test" fidelity (5 spans, coarse) on a coarse grid; full: the study fidelity (20 spans)
-on the problems' 1 cm grid.
+The design problems BPresag and SWPresag: a parabolic contact-wire pre-sag s (m at mid-span). The pantograph's
+uplift is set once per catenary and speed on the level reference design (docs/problems.md, 'Reference design
+and uplift'). Quick: the "test" fidelity (5 spans, coarse) on a coarse grid; full: the study fidelity (20
+spans) on the problems' 1 cm grid.
 
     python -m experiments.presag [--full] [--workers 2] [--out results]
 """

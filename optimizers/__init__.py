@@ -1,4 +1,5 @@
-"""Optimisers for the catenary design problems (SPEC 6): the study's GA, nevergrad, RL design policies.
+"""Optimisers for the catenary design problems (docs/problems.md, 'Optimisers'): the study's GA, nevergrad, RL
+design policies.
 
 Every ask / tell optimiser is registered in :data:`OPTIMIZERS` and run by :func:`optimize`, which owns
 the budget, the run store (resume, cache) and the parallel evaluation. The RL design policy is trained
@@ -22,7 +23,9 @@ from .base import (
     OptimizerSpec,
     register_optimizer,
 )
-from .problem import GridProblem, GridSpace, Outcome, catenary_problem, resolve_problem
+from .catenary_adapter import catenary_problem
+from .problem import GridProblem, GridSpace, Outcome
+from .problem_registry import resolve_problem
 from .runner import optimize
 from .store import RunConfig, RunStore, StoreError
 

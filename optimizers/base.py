@@ -38,6 +38,8 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from catenary_env.problems.registry import Registry
+
 from .problem import GridSpace
 
 __all__ = [
@@ -270,20 +272,10 @@ class OptimizerSpec(NamedTuple):
     summary: str
 
 
-class OptimizerRegistry(dict[str, OptimizerSpec]):
+class OptimizerRegistry(Registry[OptimizerSpec]):
     """The optimisers by name: a dict that refuses to replace an entry."""
 
-    def __setitem__(self, name: str, spec: OptimizerSpec) -> None:
-        if name in self:
-            raise ValueError(f"optimizer {name!r} is already registered")
-        if name != spec.name:
-            raise ValueError(f"optimizer registered as {name!r} is named {spec.name!r}")
-        super().__setitem__(name, spec)
-
-    def update(self, *args: Any, **kwargs: OptimizerSpec) -> None:
-        # dict.update bypasses __setitem__: route it through the check.
-        for name, spec in dict(*args, **kwargs).items():
-            self[name] = spec
+    kind = "optimizer"
 
 
 OPTIMIZERS = OptimizerRegistry()
@@ -292,8 +284,7 @@ OPTIMIZERS = OptimizerRegistry()
 
 def register_optimizer(spec: OptimizerSpec) -> OptimizerSpec:
     """Add an optimiser to :data:`OPTIMIZERS`; ValueError if the name is taken."""
-    OPTIMIZERS[spec.name] = spec
-    return spec
+    return OPTIMIZERS.register(spec)
 
 
 def get_optimizer(name: str) -> OptimizerSpec:

@@ -13,13 +13,14 @@ import argparse
 import json
 import os
 import sys
+from collections.abc import Callable
 from typing import Any
 
 from . import ga, nevergrad_adapters  # noqa: F401  (register the built-in optimisers)
 from .base import OPTIMIZERS, OptimizationResult
 from .store import StoreError
 
-__all__ = ["DEFAULT_STORE", "add_arguments", "add_parser", "run"]
+__all__ = ["DEFAULT_STORE", "add_arguments", "add_commands", "add_parser", "run"]
 
 DEFAULT_STORE = "catenary-runs.sqlite"
 """Run store used when ``--store`` is not given (in the current directory)."""
@@ -27,10 +28,10 @@ DEFAULT_STORE = "catenary-runs.sqlite"
 RL_OPTIMIZERS = ("ppo",)
 
 DESCRIPTION = (
-    "Optimise the design of a catenary problem (SPEC 4) with the study's genetic algorithm, a nevergrad "
-    "optimiser or a PPO design policy. Every evaluation is committed to an SQLite run store as it completes: "
-    "an interrupted run continues with --resume, and a design already simulated in the store is not "
-    "simulated again."
+    "Optimise the design of a catenary problem (docs/problems.md) with the study's genetic algorithm, a "
+    "nevergrad optimiser or a PPO design policy. Every evaluation is committed to an SQLite run store as it "
+    "completes: an interrupted run continues with --resume, and a design already simulated in the store is "
+    "not simulated again."
 )
 
 
@@ -40,7 +41,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "problem",
         metavar="PROBLEM",
-        help="design problem: BPresag, B1, B2, B3, SWPresag, SW1, SW2, SW3 (SPEC 4), or a cheap "
+        help="design problem: BPresag, B1, B2, B3, SWPresag, SW1, SW2, SW3 (docs/problems.md), or a cheap "
         "synthetic one for trying things out: synthetic-quadratic, synthetic-quadratic-slow",
     )
     parser.add_argument(
@@ -135,6 +136,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     return parser
 
 
+def add_commands(subparsers: Any) -> dict[str, Callable[[argparse.Namespace], int]]:
+    """Add ``catenary optimize``: the ``catenary_env.commands`` entry point of this package."""
+    add_parser(subparsers)
+    return {"optimize": run}
+
+
 def run(args: argparse.Namespace) -> int:
     """Execute ``optimize``; return the exit status (0, or 2 for bad input)."""
     try:
@@ -166,7 +173,7 @@ def _run_optimizer(args: argparse.Namespace) -> OptimizationResult:
 
 
 def _run_rl(args: argparse.Namespace) -> OptimizationResult:
-    from .problem import catenary_problem
+    from .catenary_adapter import catenary_problem
     from .rl import EnvSpec, train_design_policy
 
     if args.scheduler or (args.workers or 1) > 1:

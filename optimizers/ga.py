@@ -1,4 +1,5 @@
-"""The genetic algorithm of the reference study: MATLAB's ``ga`` on integer variables (SPEC 6).
+"""The genetic algorithm of the reference study: MATLAB's ``ga`` on integer variables (docs/problems.md,
+'Optimisers').
 
 MATLAB's ``ga`` with integer constraints replaces the user's operators by those of MI-LXPM (Deep, Singh,
 Kansal and Mohan, "A real coded genetic algorithm for solving integer and mixed integer optimization
@@ -63,7 +64,7 @@ POPULATION_SIZES: dict[str, int] = {
     "SW2": 60,
     "SW3": 100,
 }
-"""Population size of the study's GA runs per problem (SPEC 6)."""
+"""Population size of the study's GA runs per problem (docs/problems.md, 'Optimisers')."""
 
 
 class RandomSource(Protocol):

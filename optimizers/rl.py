@@ -1,8 +1,9 @@
 """RL design policies: stable-baselines3 PPO trained on a design env (``pip install catenary-env[rl]``).
 
-A design env (SPEC 5) has one-step episodes: the observation carries the task context (the normalised
-speed), the action in ``Box(-1, 1)`` is the whole design, the reward is −σ. Trained with a speed range,
-the policy is speed-conditioned: ``design = policy(speed)``, something no single-speed optimiser gives.
+A design env (docs/problems.md, 'Environments') has one-step episodes: the observation carries the task
+context (the normalised speed), the action in ``Box(-1, 1)`` is the whole design, the reward is −σ. Trained
+with a speed range, the policy is speed-conditioned: ``design = policy(speed)``, something no single-speed
+optimiser gives.
 
 The env contract this module relies on, and nothing else, so it works on any Gymnasium env with it:
 
@@ -206,7 +207,7 @@ def _recording_wrapper_class() -> type:
             return observation, info
 
         def step(self, action: Any) -> Any:
-            x = self.space.action_to_design(action)
+            x = self.space.from_action(action)
             key = self.space.design_key(x)
             index = self.recorder.next_index
             stored = self.recorder.stored(index, key)
@@ -389,4 +390,4 @@ def design_for_speed(policy: DesignPolicy, problem: GridProblem, speed_kmh: floa
     if policy.observation_scaling is not None:
         observation = policy.observation_scaling.apply(observation)
     action, _ = policy.model.predict(observation, deterministic=True)
-    return GridSpace.from_problem(problem).action_to_design(np.asarray(action).reshape(-1))
+    return GridSpace.from_problem(problem).from_action(np.asarray(action).reshape(-1))

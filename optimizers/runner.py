@@ -34,7 +34,8 @@ from numpy.typing import NDArray
 from . import ga, nevergrad_adapters  # noqa: F401  (register the built-in optimisers)
 from .base import EvaluationRecord, OptimizationResult, Optimizer, get_optimizer
 from .evaluation import EvaluationBackend, make_backend
-from .problem import GridProblem, GridSpace, Outcome, resolve_problem
+from .problem import GridProblem, GridSpace, Outcome
+from .problem_registry import resolve_problem
 from .progress import ProgressDisplay
 from .recorder import RunRecorder, open_run, options_json, package_version
 from .store import RunConfig, RunStore
@@ -63,7 +64,7 @@ def optimize(
     Parameters
     ----------
     problem : GridProblem or str
-        The problem, or its name (a catenary problem of SPEC 4 or a synthetic one).
+        The problem, or its name (a catenary problem of docs/problems.md or a synthetic one).
     optimizer : str
         A name in :data:`optimizers.base.OPTIMIZERS`.
     budget : int
@@ -98,9 +99,15 @@ def optimize(
             f"{optimizer}: options must be a {spec.options_class.__name__}, got {type(settings).__name__}"
         )
     config = RunConfig(
-        optimizer, space.store_key, int(budget), int(seed), float(speed_kmh), fidelity, options_json(settings),
+        optimizer,
+        space.store_key,
+        int(budget),
+        int(seed),
+        float(speed_kmh),
+        fidelity,
+        options_json(settings),
         package_version(),
-    )  # fmt: skip
+    )
     cap = 10 * int(budget) if max_evaluations is None else int(max_evaluations)
     with ExitStack() as stack:
         run_store = (

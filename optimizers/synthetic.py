@@ -25,6 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from catenary_env.problems.grid import DesignGrid
+
 from .problem import Outcome, SimulateFunction
 
 __all__ = ["SYNTHETIC_PROBLEMS", "QuadraticProblem", "get_synthetic_problem", "simulate_quadratic"]
@@ -89,11 +91,12 @@ class QuadraticProblem:
 
     def grid_optimum(self) -> tuple[NDArray[np.float64], float]:
         """The best feasible design on the grid and its σ, by enumeration (small grids only)."""
-        levels = np.round((self.upper - self.lower) / self.step).astype(int) + 1
+        grid = DesignGrid(self.name, self.variable_names, self.lower, self.upper, self.step)
+        levels = grid.n_levels
         if np.prod(levels) > 5_000_000:
             raise ValueError(f"{self.name}: grid of {int(np.prod(levels))} points is too large to enumerate")
         k = np.array(list(itertools.product(*(range(n) for n in levels))))
-        x = np.round(self.lower + k * self.step, 12)
+        x = grid.from_index(k)
         sigma = np.where(self.feasible(x), self.sigma(x), np.inf)
         best = int(np.argmin(sigma))
         return x[best], float(sigma[best])

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from catenary_env.design import level_design
-from catenary_env.presets import load_catenary, load_pantograph
-from catenary_env.shape_finding import StaticSolution
-from catenary_env.simulation import Fidelity, solve_static
+from catenary_env.model.design import level_design
+from catenary_env.model.presets import load_catenary, load_pantograph
+from catenary_env.pipeline import Fidelity, solve_static
+from catenary_env.statics.shape_finding import StaticSolution
 
 SHORT = Fidelity(
     n_spans=5, analysis_spans=1, contact_wire_element=1.0, messenger_wire_element=2.0, time_step=2e-3

@@ -7,8 +7,8 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from catenary_env.assembly import SparseScatter
-from catenary_env.track_order import MAX_BAND, TrackOrderSolver
+from catenary_env.fem.assembly import SparseScatter
+from catenary_env.fem.track_order import MAX_BAND, TrackOrderSolver
 
 
 @pytest.mark.parametrize("format", ["csr", "csc"])

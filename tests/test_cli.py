@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import importlib.metadata
 import json
 
 import pytest
 
+from catenary_env import cli
 from catenary_env.cli import main
 
 
@@ -73,3 +75,19 @@ def test_presets_lists_and_copies(tmp_path, capsys):
     assert main(["presets", "--copy", "benchmark", str(target)]) == 0
     assert "[provenance]" in target.read_text()
     assert main(["static", str(target), "--fidelity", "test", "--json"]) == 0
+
+
+def test_the_packages_above_plug_their_commands_in():
+    _, handlers = cli.build_parser()
+    assert {"optimize", "experiment", "report"} <= set(handlers)  # entry points, not imports
+
+
+def test_a_command_plugin_that_fails_to_load_says_so_in_one_line(monkeypatch, capsys):
+    broken = importlib.metadata.EntryPoint(
+        name="broken", value="no_such_package.cli:add_commands", group=cli.COMMANDS_GROUP
+    )
+    monkeypatch.setattr(importlib.metadata, "entry_points", lambda group: [broken])
+    _, handlers = cli.build_parser()
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "'broken'" in err and "no_such_package" in err
+    assert "simulate" in handlers and "optimize" not in handlers  # the simulator's own commands stay

@@ -1,4 +1,4 @@
-"""Mesh and time-step convergence of σ on the benchmark preset (SPEC 3.2, 8).
+"""Mesh and time-step convergence of σ on the benchmark preset (docs/model.md, 'Verification').
 
 A short section keeps the test quick; the 20-span table is in experiments/convergence.py.
 """
@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import pytest
 
-from catenary_env.design import level_design
-from catenary_env.simulation import Fidelity, simulate
+from catenary_env.model.design import level_design
+from catenary_env.pipeline import Fidelity, simulate
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,5 @@
-"""Dynamics (SPEC 3.5–3.6, 8): the fast method against the oracle, and closed forms."""
+"""Dynamics (docs/model.md, 'Time integration and the fast method'): the fast method against the oracle, and
+closed forms."""
 
 from __future__ import annotations
 
@@ -9,14 +10,14 @@ import pytest
 import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
-from catenary_env.design import Design, level_design
-from catenary_env.dynamics import simulate_passage
-from catenary_env.layout import CONTACT, build_layout
-from catenary_env.linear_system import linearise
-from catenary_env.newmark import NewmarkConstants
-from catenary_env.oracle import simulate_passage_reference
-from catenary_env.presets import load_catenary, load_pantograph
-from catenary_env.shape_finding import find_shape
+from catenary_env.dynamics.linear_system import linearise
+from catenary_env.dynamics.newmark import NewmarkConstants
+from catenary_env.dynamics.oracle import simulate_passage_reference
+from catenary_env.dynamics.passage import simulate_passage
+from catenary_env.fem.layout import CONTACT, build_layout
+from catenary_env.model.design import Design, level_design
+from catenary_env.model.presets import load_catenary, load_pantograph
+from catenary_env.statics.shape_finding import find_shape
 
 
 def test_fast_method_equals_the_straightforward_method_with_contact_loss_and_slack_droppers():
@@ -64,7 +65,7 @@ def test_newmark_converges_at_second_order_on_a_linear_oscillator():
 
 def _string(monkeypatch, span: float, support_stiffness: float, element: float):
     """A contact wire alone between two supports, with gravity off so that it is straight."""
-    monkeypatch.setattr("catenary_env.assembly.GRAVITY", 0.0)
+    monkeypatch.setattr("catenary_env.fem.assembly.GRAVITY", 0.0)
     base = load_catenary("benchmark")
     catenary = dataclasses.replace(
         base,

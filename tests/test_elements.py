@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from catenary_env.ancf import GAUSS_W, GAUSS_XI, cable_state, mass_matrix
-from catenary_env.bar import bar_state
+from catenary_env.fem.ancf import GAUSS_W, GAUSS_XI, cable_state, mass_matrix
+from catenary_env.fem.bar import bar_state
 
 
 def _cables(seed: int = 0, n: int = 4) -> tuple[np.ndarray, np.ndarray]:

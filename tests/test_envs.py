@@ -1,4 +1,4 @@
-"""The Gymnasium environments of SPEC 5.
+"""The Gymnasium environments (docs/problems.md, 'Environments').
 
 Two groups. Tests of the environment's mechanics (spaces, the action mapping, clipping, bad actions,
 seeding, rewards, vector envs and how many simulations they run) replace the simulator with a fast,
@@ -20,13 +20,13 @@ from gymnasium.utils.env_checker import check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import catenary_env.envs
-from catenary_env import simulation
-from catenary_env.design import Design, level_design
+from catenary_env import pipeline
+from catenary_env.analysis.statistics import ContactStatistics
 from catenary_env.envs import CatenaryDesignEnv, env_ids, register_envs
 from catenary_env.envs.design_env import INFEASIBLE_SIGMA_OVER_MEAN
+from catenary_env.model.design import Design, level_design
+from catenary_env.pipeline import Evaluation, en50367_mean_force
 from catenary_env.problems import PROBLEMS, clear_caches, resolve_fidelity
-from catenary_env.simulation import Evaluation, en50367_mean_force
-from catenary_env.statistics import ContactStatistics
 
 register_envs()
 
@@ -86,8 +86,9 @@ def fake_simulator(monkeypatch: pytest.MonkeyPatch) -> Iterator[FakeSimulator]:
     # the real tests (which share theirs, as a process would).
     fake = FakeSimulator()
     clear_caches()
-    monkeypatch.setattr(simulation, "evaluate", fake.evaluate)
-    monkeypatch.setattr(simulation, "calibrate_uplift", fake.calibrate_uplift)
+    monkeypatch.setattr(pipeline, "evaluate", fake.evaluate)
+    monkeypatch.setattr(pipeline, "evaluate_unchecked", fake.evaluate)
+    monkeypatch.setattr(pipeline, "calibrate_uplift", fake.calibrate_uplift)
     yield fake
     clear_caches()
 
@@ -418,10 +419,10 @@ def test_reference_design_as_an_action_reproduces_the_reference_sigma(name: str)
     )
     speed = 300.0 / 3.6
     design = level_design(catenary)
-    uplift = simulation.calibrate_uplift(
+    uplift = pipeline.calibrate_uplift(
         catenary, pantograph, design, speed, fidelity, target_mean=en50367_mean_force(speed)
     )
-    direct = simulation.evaluate(catenary, pantograph, design, speed, fidelity, uplift_force=uplift)
+    direct = pipeline.evaluate(catenary, pantograph, design, speed, fidelity, uplift_force=uplift)
     assert info["design"] == design and info["feasible"] and direct.feasible
     assert info["uplift_force"] == pytest.approx(uplift, rel=1e-9)
     assert reward == pytest.approx(-direct.statistics.std, rel=1e-9)

@@ -1,4 +1,5 @@
-"""Studies re-plot from their data files alone (SPEC 7): no simulation in ``report``."""
+"""Studies re-plot from their data files alone (docs/problems.md, 'Experiments'): no simulation in
+``report``."""
 
 from __future__ import annotations
 

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import dataclasses
 
-from catenary_env.presets import load_catenary
+from catenary_env.model.presets import load_catenary
+from catenary_env.pipeline import model_fingerprint
 from catenary_env.problems import get_problem
-from catenary_env.simulation import model_fingerprint
-from optimizers.problem import GridSpace, catenary_problem
+from optimizers import GridSpace, catenary_problem
 
 
 def test_fingerprint_is_stable_and_follows_the_data():

@@ -1,4 +1,5 @@
-"""The compiled passage (catenary_env._kernels) against the numpy backend (SPEC 3.6, 9).
+"""The compiled passage (catenary_env.dynamics._kernels) against the numpy backend (docs/performance.md,
+'Benchmark').
 
 The two backends run the same method with the same arithmetic up to the order of sums, so they
 must agree to rounding: the contact force to 1e-8 N, through contact losses and slack droppers.
@@ -11,18 +12,18 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from catenary_env import dynamics
-from catenary_env.design import level_design
-from catenary_env.dynamics import prepare_passage, simulate_passage
-from catenary_env.layout import build_layout
-from catenary_env.linear_system import linearise
-from catenary_env.presets import load_catenary, load_pantograph
-from catenary_env.shape_finding import find_shape
+from catenary_env.dynamics import passage
+from catenary_env.dynamics.linear_system import linearise
+from catenary_env.dynamics.passage import prepare_passage, simulate_passage
+from catenary_env.fem.layout import build_layout
+from catenary_env.model.design import level_design
+from catenary_env.model.presets import load_catenary, load_pantograph
+from catenary_env.statics.shape_finding import find_shape
 
 
 @pytest.fixture(scope="module")
 def kernels():
-    return pytest.importorskip("catenary_env._kernels", reason="the compiled backend needs numba")
+    return pytest.importorskip("catenary_env.dynamics._kernels", reason="the compiled backend needs numba")
 
 
 def _system(preset: str):
@@ -96,7 +97,7 @@ def test_without_numba_auto_falls_back_to_numpy_and_numba_says_how_to_install(en
     system, pantograph = en50318
     args = (system, pantograph, 150.0, 80.0, 2e-3, 20)
     reference = simulate_passage(*args, backend="numpy")
-    monkeypatch.setattr(dynamics, "_compiled_kernels", lambda: None)
+    monkeypatch.setattr(passage, "_compiled_kernels", lambda: None)
     np.testing.assert_array_equal(simulate_passage(*args).contact_force, reference.contact_force)
     with pytest.raises(ImportError, match="pip install numba"):
         simulate_passage(*args, backend="numba")

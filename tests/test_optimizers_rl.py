@@ -57,7 +57,7 @@ class SpeedQuadraticDesignEnv(gymnasium.Env):
         return self._observation(), {"speed_kmh": self.speed_kmh}
 
     def step(self, action):
-        x = SPACE.action_to_design(action)
+        x = SPACE.from_action(action)
         centre = np.array([0.01, -0.01]) * (self.speed_kmh - 250.0) / 50.0
         sigma = 20.0 + float(np.sum(((x - centre) / 0.01) ** 2))
         feasible = bool(PROBLEM.feasible(x))

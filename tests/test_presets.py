@@ -1,6 +1,8 @@
-"""Catenary and pantograph presets: recorded values, provenance tags, and validation on load (SPEC 10, 11).
+"""Catenary and pantograph presets: recorded values, provenance tags, and validation on load (docs/model.md,
+'Data and sources').
 
-Values and tags are those of reference/models.md; a failure here means a preset file drifted from it.
+Values and tags are those of docs/model.md, 'Data and sources'; a failure here means a preset file drifted
+from it.
 """
 
 from __future__ import annotations
@@ -13,8 +15,8 @@ from typing import Any
 
 import pytest
 
-from catenary_env.definition import CatenaryDefinition, DefinitionError, PantographDefinition
-from catenary_env.presets import (
+from catenary_env.model.definition import CatenaryDefinition, DefinitionError, PantographDefinition
+from catenary_env.model.presets import (
     catenary_names,
     load_catenary,
     load_pantograph,
@@ -65,7 +67,7 @@ def _comment(text: str, dotted: str) -> str:
 
 
 # ---------------------------------------------------------------------------------------------------------
-# Recorded values (reference/models.md)
+# Recorded values (docs/model.md, 'Data and sources')
 
 CATENARIES = ["benchmark", "en50318-2002", "stitched"]
 PANTOGRAPHS = ["benchmark", "en50318-2002"]
@@ -131,7 +133,7 @@ def test_benchmark_values() -> None:
     assert p.masses == (6.0, 9.0, 7.5)
     assert p.stiffnesses == (160.0, 15500.0, 7000.0)
     assert p.dampings == (100.0, 0.0, 0.0)
-    assert p.uplift_force is None  # set by the study (SPEC 3.5)
+    assert p.uplift_force is None  # set by the study (docs/model.md, 'Pantograph and contact')
 
 
 def test_stitched_values() -> None:
@@ -160,8 +162,8 @@ def test_stitched_shares_the_benchmark_droppers_supports_damping_and_contact() -
 # ---------------------------------------------------------------------------------------------------------
 # Provenance
 
-# Every figure tagged [A] in reference/models.md, by preset (a study setting is tagged A as well, and so is a
-# figure models.md does not give, set to zero).
+# Every figure tagged [A] in docs/model.md, 'Data and sources', by preset (a study setting is tagged A as
+# well, and so is a figure models.md does not give, set to zero).
 ASSUMED = {
     ("catenary", "en50318-2002"): [
         "contact_wire.axial_stiffness",
@@ -340,7 +342,7 @@ def test_a_relative_pantograph_path_resolves_next_to_the_catenary_file(tmp_path:
 
 
 # ---------------------------------------------------------------------------------------------------------
-# Invalid definitions: each error names the file and the field (SPEC 11)
+# Invalid definitions: each error names the file and the field (docs/model.md, 'Data and sources')
 
 
 @pytest.mark.parametrize(

@@ -1,4 +1,5 @@
-"""Design problems of SPEC 4: variables, bounds, grid, the mapping to designs, and the registry.
+"""Design problems (docs/problems.md, 'The eight problems'): variables, bounds, grid, the mapping to designs,
+and the registry.
 
 Nothing here runs the simulator, except where a test replaces it to count calls (marked).
 """
@@ -11,9 +12,10 @@ import pickle
 import numpy as np
 import pytest
 
-from catenary_env import simulation
-from catenary_env.design import Design, DesignError, check_design
-from catenary_env.presets import load_catenary
+from catenary_env import pipeline
+from catenary_env.model.design import Design, DesignError, check_design
+from catenary_env.model.presets import load_catenary
+from catenary_env.pipeline import FIDELITIES, Evaluation, Fidelity
 from catenary_env.problems import (
     HEIGHT_STEP,
     POSITION_STEP,
@@ -26,9 +28,8 @@ from catenary_env.problems import (
     register_problem,
     resolve_fidelity,
 )
-from catenary_env.simulation import FIDELITIES, Evaluation, Fidelity
 
-# SPEC 4's table, written out again so that a change to either is seen.
+# The table of docs/problems.md, 'The eight problems', written out again so that a change to either is seen.
 SPEC_TABLE = {
     "BPresag": ("benchmark", 9, ["s"], [-0.02], [0.10]),
     "B1": ("benchmark", 9, [f"dh_{i}" for i in range(1, 6)], [-0.02] * 5, [0.02] * 5),
@@ -218,7 +219,7 @@ def test_reference_x_of_the_height_problems_is_zero() -> None:
 
 
 def test_sw3_upper_d1_puts_dropper_1_at_the_stitch_wire_end() -> None:
-    # The one corner of a box that the catenary cannot build: SPEC 4 bounds d_1 by 9 m, the stitch wire's
+    # The one corner of a box that the catenary cannot build: SW3 bounds d_1 by 9 m, the stitch wire's
     # half-length, and dropper 1 must hang from the stitch wire (strictly inside it).
     problem = PROBLEMS["SW3"]
     with pytest.raises(DesignError, match="stitch wire"):
@@ -229,12 +230,13 @@ def test_sw3_upper_d1_puts_dropper_1_at_the_stitch_wire_end() -> None:
 def test_invalid_design_in_bounds_is_infeasible_without_simulating(monkeypatch: pytest.MonkeyPatch) -> None:
     # Replaces the simulator to show that it is not called (and the uplift force to avoid calibrating).
     clear_caches()
-    monkeypatch.setattr(simulation, "calibrate_uplift", lambda *args, **kwargs: 160.0)
+    monkeypatch.setattr(pipeline, "calibrate_uplift", lambda *args, **kwargs: 160.0)
 
     def no_simulation(*args: object, **kwargs: object) -> Evaluation:
         raise AssertionError("an invalid design must not be simulated")
 
-    monkeypatch.setattr(simulation, "evaluate", no_simulation)
+    monkeypatch.setattr(pipeline, "evaluate", no_simulation)
+    monkeypatch.setattr(pipeline, "evaluate_unchecked", no_simulation)
     try:
         evaluation = PROBLEMS["SW3"].evaluate([9.0, 20.0, 0.0, 0.0, 0.0], 300.0, "test")
     finally:
@@ -274,8 +276,9 @@ def test_uplift_is_calibrated_once_per_catenary_speed_and_fidelity_on_the_refere
         return Evaluation(True, "", None, (), (), float(uplift_force), 0.0)
 
     clear_caches()
-    monkeypatch.setattr(simulation, "calibrate_uplift", calibrate)
-    monkeypatch.setattr(simulation, "evaluate", evaluate)
+    monkeypatch.setattr(pipeline, "calibrate_uplift", calibrate)
+    monkeypatch.setattr(pipeline, "evaluate", evaluate)
+    monkeypatch.setattr(pipeline, "evaluate_unchecked", evaluate)
     try:
         PROBLEMS["B1"].evaluate([0.0] * 5, 300.0, "test")
         PROBLEMS["B3"].evaluate(

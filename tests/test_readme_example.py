@@ -1,4 +1,4 @@
-"""The README's Python example runs as printed (SPEC 10) and gives a σ.
+"""The README's Python example runs as printed (STYLE: doc examples are run) and gives a σ.
 
 The example lives in ``docs/envs_table.md`` (pasted into ``README.md``); every Python block that makes a
 ``Catenary-`` environment, in either file, is run in a fresh interpreter, as a user would run it: so it

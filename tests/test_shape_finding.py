@@ -1,4 +1,5 @@
-"""Shape-finding (SPEC 3.3, 8): equilibrium, tensions, design heights, load paths, closed forms."""
+"""Shape-finding (docs/model.md, 'Shape-finding'): equilibrium, tensions, design heights, load paths, closed
+forms."""
 
 from __future__ import annotations
 
@@ -9,11 +10,11 @@ import pytest
 from conftest import SHORT
 from scipy.optimize import brentq
 
-from catenary_env.design import GRAVITY, Design, DesignError, check_design, level_design, presag_design
-from catenary_env.layout import CONTACT, MESSENGER, build_layout
-from catenary_env.shape_finding import ShapeEquations, ShapeFindingError, find_shape, initial_guess
-from catenary_env.simulation import Fidelity, solve_static
-from catenary_env.static_analysis import stiffness_profile
+from catenary_env.analysis.static_analysis import stiffness_profile
+from catenary_env.fem.layout import CONTACT, MESSENGER, build_layout
+from catenary_env.model.design import GRAVITY, Design, DesignError, check_design, level_design, presag_design
+from catenary_env.pipeline import Fidelity, solve_static
+from catenary_env.statics.shape_finding import ShapeEquations, ShapeFindingError, find_shape, initial_guess
 
 
 @pytest.mark.parametrize("name", ["benchmark_static", "stitched_static"])
@@ -26,7 +27,7 @@ def test_equilibrium_residual_is_below_1e_8_of_the_tension(name, request):
 
 def _horizontal_tension(static):
     """Horizontal component of the force each cable element carries, N (x-force at its far node)."""
-    from catenary_env.ancf import cable_state
+    from catenary_env.fem.ancf import cable_state
 
     lay = static.layout
     n_c = lay.cable_nodes.shape[0]

@@ -1,4 +1,4 @@
-"""EN 50318:2002 validation (SPEC 8; reference/models.md section 1), computed with the reference data as given.
+"""EN 50318:2002 validation (docs/model.md, 'Verification'), with the reference data as given.
 
 Each quantity at each speed is one test. Quantities the simulator misses are marked as known
 failures with the measured value (strict: the mark must go when they start to pass). Nothing is

@@ -1,4 +1,5 @@
-"""Gymnasium environments ``Catenary-<problem>-v0``, one per design problem of SPEC 4 (needs gymnasium).
+"""Gymnasium environments ``Catenary-<problem>-v0``, one per design problem (docs/problems.md, 'Environments';
+needs gymnasium).
 
 Since Gymnasium 1.0 a third-party package registers its environments on import; :func:`register_envs`
 does it and may be called any number of times.

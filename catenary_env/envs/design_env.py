@@ -1,4 +1,5 @@
-"""The Gymnasium environment of a catenary design problem: one action is one whole design (SPEC 5)."""
+"""The Gymnasium environment of a catenary design problem: one action is one whole design (docs/problems.md,
+'Environments')."""
 
 from __future__ import annotations
 
@@ -11,11 +12,11 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import ArrayLike, NDArray
 
-from ..definition import CatenaryDefinition
-from ..design import Design, check_speed
+from ..analysis.statistics import ContactStatistics
+from ..model.definition import CatenaryDefinition
+from ..model.design import Design, check_speed
+from ..pipeline import Evaluation, Fidelity, en50367_mean_force
 from ..problems import DesignProblem, get_problem, resolve_fidelity
-from ..simulation import Evaluation, Fidelity, en50367_mean_force
-from ..statistics import ContactStatistics
 
 OBJECTIVES = ("sigma", "mean_sigma_over_speeds", "worst_sigma_over_speeds")
 """Objective names: σ at one speed, the mean of σ over ``speeds_kmh``, the largest σ over ``speeds_kmh``."""
@@ -37,15 +38,15 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     """
     ## Description
 
-    The design of a railway catenary (overhead contact line) for fast, smooth current collection,
-    posed as one decision: the action is the whole geometry of a span (contact-wire heights at the
-    droppers, or dropper positions, or both), the catenary is built and a pantograph runs under it in a
-    finite-element simulation, and the reward is minus the standard deviation σ of the 20 Hz filtered
-    contact force over the central spans (SPEC 4). Each problem has its own env,
-    `Catenary-<problem>-v0`; every span is equal and symmetric, so one variable sets a dropper and its
-    mirror. The pantograph's uplift force is set once per speed, on the problem's reference design (the
-    level contact wire on the preset's droppers), so that its mean contact force equals the EN 50367
-    target (157.3 N at 300 km/h); every design is simulated with that force.
+    The design of a railway catenary (overhead contact line) for fast, smooth current collection, posed as one
+    decision: the action is the whole geometry of a span (contact-wire heights at the droppers, or dropper
+    positions, or both), the catenary is built and a pantograph runs under it in a finite-element simulation,
+    and the reward is minus the standard deviation σ of the 20 Hz filtered contact force over the central
+    spans (docs/problems.md, 'The eight problems'). Each problem has its own env, `Catenary-<problem>-v0`;
+    every span is equal and symmetric, so one variable sets a dropper and its mirror. The pantograph's uplift
+    force is set once per speed, on the problem's reference design (the level contact wire on the preset's
+    droppers), so that its mean contact force equals the EN 50367 target (157.3 N at 300 km/h); every design
+    is simulated with that force.
 
     ## Action Space
 
@@ -109,9 +110,10 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ## Info
 
     After `step`: `feasible` (bool), `reason` (str, empty when feasible), `variables` (dict of the
-    variables on their grid, m), `design` (the full :class:`~catenary_env.design.Design`), `speed_kmh`,
-    `objective` (the σ value behind the reward, N, before normalisation; the penalty when infeasible),
-    every field of :class:`~catenary_env.statistics.ContactStatistics` (`mean`, `std`, `std_over_mean`,
+    variables on their grid, m), `design` (the full :class:`~catenary_env.model.design.Design`),
+    `speed_kmh`, `objective` (the σ value behind the reward, N, before normalisation; the penalty when
+    infeasible), every field of :class:`~catenary_env.analysis.statistics.ContactStatistics` (`mean`,
+    `std`, `std_over_mean`,
     `statistical_max`, `statistical_min`, `actual_max`, `actual_min` in N, `contact_loss_percent` in %,
     `max_support_uplift` in m; absent when the design was not simulated dynamically),
     `uplift_force` (N), `dropper_lengths` (m) and `dropper_forces` (N) of a central span,
@@ -128,7 +130,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     - `n_spans=None`: spans in the section, overriding the fidelity's (the analysis section shrinks to
       `n_spans - 2` spans if needed).
     - `fidelity="study"`: `"study"` (20 spans, statistics on 10, Δt = 1 ms), `"test"` (5 spans, coarse
-      mesh; for tests only) or a :class:`~catenary_env.simulation.Fidelity`.
+      mesh; for tests only) or a :class:`~catenary_env.pipeline.Fidelity`.
     - `objective="sigma"`: or `"mean_sigma_over_speeds"`, `"worst_sigma_over_speeds"` with `speeds_kmh`.
     - `speeds_kmh=None`: speeds of a multi-speed objective, km/h.
     - `normalize_reward=False`: divide the reward by the reference design's objective.
@@ -239,15 +241,11 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     def action_to_x(self, action: ArrayLike) -> NDArray[np.float64]:
         """The problem's variables (m, on the grid) of an action (clipped to [-1, 1])."""
-        a = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
-        lower, upper = self.problem.lower, self.problem.upper
-        return self.problem.snap(lower + 0.5 * (a + 1.0) * (upper - lower))
+        return self.problem.grid.from_action(action)
 
     def x_to_action(self, x: ArrayLike) -> NDArray[np.float32]:
         """The action of variables ``x`` (m, within the bounds): :meth:`action_to_x`'s inverse on the grid."""
-        values = self.problem.check_variables(x)
-        lower, upper = self.problem.lower, self.problem.upper
-        return (2.0 * (values - lower) / (upper - lower) - 1.0).astype(np.float32)
+        return self.problem.grid.to_action(self.problem.check_variables(x)).astype(np.float32)
 
     # -- helpers ------------------------------------------------------------------------------------------
 

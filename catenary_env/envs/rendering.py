@@ -1,7 +1,7 @@
 """A picture of one span's design for :meth:`CatenaryDesignEnv.render` (matplotlib, optional dependency).
 
 Top panel: the span as built, to scale in metres: messenger wire (parabolic estimate, the same one
-:func:`~catenary_env.design.check_design` uses), droppers, contact wire through the design heights.
+:func:`~catenary_env.model.design.check_design` uses), droppers, contact wire through the design heights.
 Middle panel: the contact-wire height change Δh at the droppers in millimetres, where a few millimetres
 are visible, with the simulation's statistics as text. Bottom panel (after a step): the filtered contact
 force along the analysis section.
@@ -16,8 +16,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from ..definition import CatenaryDefinition
-from ..design import Design, estimated_messenger_height
+from ..model.definition import CatenaryDefinition
+from ..model.design import Design, estimated_messenger_height
 
 if TYPE_CHECKING:  # matplotlib is optional: imported for real only inside render_design
     from matplotlib.axes import Axes

@@ -1,0 +1,1 @@
+"""What is measured on a solution: contact-force statistics and the static stiffness."""

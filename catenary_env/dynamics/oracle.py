@@ -1,0 +1,130 @@
+"""The straightforward pantograph passage, kept as the test oracle of the fast method (docs/model.md, 'Time
+integration and the fast method').
+
+Every time step re-assembles the coupled catenary–pantograph system with the current contact and
+slack-dropper states (contact as a penalty spring between the head and the contact wire, slack
+droppers removed with their damping) and solves it with a sparse direct solver, iterating until
+the states are consistent: Newton's method on the piecewise-linear problem. No superposition, no
+pre-computed responses, no factorisation reused between steps. Slow by design; use it on short
+sections only.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ..model.definition import PantographDefinition
+from .linear_system import LinearSystem
+from .newmark import NewmarkConstants, Trajectory, passage_positions
+from .pantograph import pantograph_matrices, static_contact
+from .passage import MAX_ACTIVE_SET_ITERATIONS, switch_states
+
+
+def simulate_passage_reference(
+    system: LinearSystem,
+    pantograph: PantographDefinition,
+    uplift_force: float,
+    speed: float,
+    time_step: float,
+    n_steps: int | None = None,
+) -> Trajectory:
+    """Same contract as :func:`.passage.simulate_passage`; ``n_steps`` may cut it short."""
+    lay = system.static.layout
+    cat = lay.catenary
+    nm = NewmarkConstants.for_step(time_step)
+    M, K = system.mass.tocsr(), system.stiffness.tocsr()
+    C = system.damping
+    B = system.dropper_elongation.tocsr()
+    rate, N0, beta = system.dropper_rate, system.dropper_force, system.beta
+    pm = pantograph_matrices(pantograph)
+    head = pm.head
+    n, n_p = system.n_dofs, pm.mass.shape[0]
+    kh = cat.contact_stiffness
+    time, position = passage_positions(lay.n_spans * lay.span_length, speed, time_step)
+    if n_steps is not None:
+        time, position = time[:n_steps], position[:n_steps]
+    element, shape, wire_z = system.contact_wire.locate(position)
+    wire_z = wire_z - cat.contact_wire_height
+
+    # Effective matrices of the coupled system [u; y] without contact and with every dropper taut.
+    Khat = K + nm.a1 * C + nm.a0 * M
+    Kp_hat = pm.stiffness + nm.a1 * pm.damping + nm.a0 * pm.mass
+    base = sp.block_diag([Khat, sp.csr_matrix(Kp_hat)]).tocsr()
+    M_all = sp.block_diag([M, sp.csr_matrix(pm.mass)]).tocsr()
+    C_all = sp.block_diag([C, sp.csr_matrix(pm.damping)]).tocsr()
+
+    y, f0 = static_contact(pm, uplift_force, kh, wire_z[0])
+    U = np.r_[np.zeros(n), y]
+    V = np.zeros(n + n_p)
+    N_row0 = np.zeros(n + n_p)
+    N_row0[system.contact_wire.z_dofs[element[0]]] = shape[0]
+    A = np.r_[spla.spsolve(M.tocsc(), N_row0[:n] * f0), np.zeros(n_p)]
+
+    steps = time.size
+    force = np.zeros(steps)
+    force[0] = f0
+    head_h = np.zeros(steps)
+    head_h[0] = y[head]
+    uplift = np.zeros(steps)
+    supports = np.zeros((steps, system.support_z.size))
+    d_min, d_max = N0.copy(), N0.copy()
+    contact, slack = f0 > 0.0, np.zeros(N0.size, dtype=bool)
+    slack_steps = unresolved = 0
+    for k in range(1, steps):
+        rhs = M_all @ (nm.a0 * U + nm.a2 * V + nm.a3 * A) + C_all @ (nm.a1 * U + nm.a4 * V + nm.a5 * A)
+        rhs[n] += uplift_force
+        # Contact row: the wire's height at the pantograph is N·u, the head's is y_head.
+        N_row = np.zeros(n + n_p)
+        N_row[system.contact_wire.z_dofs[element[k]]] = shape[k]
+        N_row[n + head] = -1.0  # N_row · U = wire uplift - head height
+        velocity_part = B @ (nm.a1 * U[:n] + nm.a4 * V[:n] + nm.a5 * A[:n])
+        for iteration in range(MAX_ACTIVE_SET_ITERATIONS):
+            matrix = base.copy()
+            r = rhs.copy()
+            if contact:
+                # f = kh (y_head - wire_z - N u), acting up on the wire and down on the head.
+                matrix = matrix + kh * sp.csr_matrix(np.outer(N_row, N_row))
+                r += kh * (-wire_z[k]) * N_row
+            if np.any(slack):
+                Bs = B[slack]
+                k_s = rate[slack] * (1.0 + beta * nm.a1)
+                extra = sp.csr_matrix(Bs.T @ sp.diags(k_s) @ Bs)
+                matrix = matrix - sp.block_diag([extra, sp.csr_matrix((n_p, n_p))])
+                r[:n] += Bs.T @ (N0[slack] - beta * rate[slack] * velocity_part[slack])
+            U_new = spla.spsolve(matrix.tocsc(), r)
+            gap = -(N_row @ U_new) - wire_z[k]
+            elongation = B @ U_new[:n]
+            elastic = N0 + rate * ((1.0 + beta * nm.a1) * elongation - beta * velocity_part)
+            new_contact, new_slack = bool(gap > 0.0), elastic < 0.0
+            if new_contact == contact and np.array_equal(new_slack, slack):
+                break
+            contact, slack = switch_states(
+                contact, slack, new_contact, new_slack, kh * gap, elastic, iteration
+            )
+        else:
+            unresolved += 1
+        V, A = nm.update(U, V, A, U_new)
+        U = U_new
+        force[k] = kh * gap if contact else 0.0
+        head_h[k] = U[n + head]
+        uplift[k] = shape[k] @ U[system.contact_wire.z_dofs[element[k]]]
+        supports[k] = U[system.support_z]
+        dropper = np.where(slack, 0.0, elastic)
+        np.minimum(d_min, dropper, out=d_min)
+        np.maximum(d_max, dropper, out=d_max)
+        slack_steps += bool(np.any(slack))
+    return Trajectory(
+        time,
+        position,
+        force,
+        head_h,
+        uplift,
+        lay.support_x.copy(),
+        supports,
+        d_min,
+        d_max,
+        slack_steps,
+        unresolved,
+    )

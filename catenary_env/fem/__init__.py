@@ -1,0 +1,1 @@
+"""Finite elements: the mesh of a section (layout), ANCF cables and bars, assembly, the banded solver."""

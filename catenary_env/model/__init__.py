@@ -1,0 +1,1 @@
+"""The catenary and pantograph definitions, designs and the preset data files: what is simulated."""

@@ -1,0 +1,388 @@
+"""The evaluation pipeline: definition + design -> statics -> dynamics -> statistics (docs/model.md, 'Data
+flow').
+
+This is the one entry point the environments and optimisers use: :func:`evaluate` never raises for
+an infeasible design; it returns an :class:`Evaluation` whose ``feasible`` and ``reason`` say why.
+Bad input (an invalid design or speed) raises :class:`~catenary_env.model.design.DesignError` before any
+solve.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .analysis.statistics import ContactStatistics, filtered_contact_force, passage_statistics
+from .dynamics.linear_system import LinearSystem, linearise
+from .dynamics.newmark import Trajectory
+from .dynamics.passage import PreparedPassage, prepare_passage, simulate_passage
+from .fem.layout import build_layout
+from .model.definition import CatenaryDefinition, PantographDefinition
+from .model.design import Design, DesignError, check_design, check_speed
+from .statics.shape_finding import ShapeFindingError, StaticSolution, find_shape
+
+PHYSICS_REVISION = 1
+"""Raised whenever a change of the simulator changes its results, so that stored results of older
+revisions are not reused (it is part of :func:`model_fingerprint`)."""
+
+
+def model_fingerprint(*records: object) -> str:
+    """A short hash of definitions' data (provenance excluded) and :data:`PHYSICS_REVISION`.
+
+    Two evaluations may share a cached result only when their fingerprints agree: an edited copy of a
+    preset that keeps its name, or a new simulator revision, gets a new fingerprint.
+    """
+    import dataclasses
+    import hashlib
+    import json
+
+    def plain(record: object) -> object:
+        if dataclasses.is_dataclass(record) and not isinstance(record, type):
+            data = dataclasses.asdict(record)
+            data.pop("provenance", None)
+            return data
+        return record
+
+    text = json.dumps([PHYSICS_REVISION, *map(plain, records)], sort_keys=True, default=repr)
+    return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+
+@dataclass(frozen=True)
+class Fidelity:
+    """Model size and resolution.
+
+    Attributes
+    ----------
+    n_spans : int
+        Spans in the section.
+    analysis_spans : int
+        Central spans over which statistics are taken.
+    contact_wire_element : float
+        Largest contact-wire element length, m.
+    messenger_wire_element : float
+        Largest messenger-wire element length, m.
+    time_step : float
+        Newmark time step, s.
+    """
+
+    n_spans: int = 20
+    analysis_spans: int = 10
+    contact_wire_element: float = 0.5
+    messenger_wire_element: float = 1.0
+    time_step: float = 1e-3
+
+
+FIDELITIES: dict[str, Fidelity] = {
+    # The design studies' setting: 20 spans, statistics on the 10 central ones (docs/performance.md, 'Model
+    # fidelities').
+    "study": Fidelity(),
+    # Small enough for unit tests: a short section and a coarse mesh; not for design conclusions.
+    "test": Fidelity(
+        n_spans=5, analysis_spans=1, contact_wire_element=1.5, messenger_wire_element=3.0, time_step=2e-3
+    ),
+}
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """The outcome of simulating one design at one speed.
+
+    Attributes
+    ----------
+    feasible : bool
+        False when a dropper is in compression at equilibrium (static) or contact is lost in the
+        analysis section (dynamic).
+    reason : str
+        Empty when feasible, otherwise why not, e.g. ``"static: dropper 3 in compression (-12.3 N)"``.
+    statistics : ContactStatistics or None
+        None when the design is statically infeasible (no dynamic run is made).
+    dropper_lengths : tuple of float
+        Unstretched lengths of the droppers of one central span, m (empty when shape-finding failed).
+    dropper_forces : tuple of float
+        Static dropper forces of one central span, N.
+    uplift_force : float
+        Static uplift force of the pantograph used, N.
+    wall_time : float
+        s.
+    trace_position, trace_force : tuple of float
+        The filtered contact force (N) along the analysis section (m), at most
+        :data:`TRACE_POINTS` samples, for pictures; empty when no passage was simulated.
+    """
+
+    feasible: bool
+    reason: str
+    statistics: ContactStatistics | None
+    dropper_lengths: tuple[float, ...]
+    dropper_forces: tuple[float, ...]
+    uplift_force: float
+    wall_time: float
+    trace_position: tuple[float, ...] = ()
+    trace_force: tuple[float, ...] = ()
+
+
+TRACE_POINTS = 1000
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """Everything one simulation computed, for plots and analysis.
+
+    Attributes
+    ----------
+    static : StaticSolution
+    system : LinearSystem
+    trajectory : Trajectory
+    statistics : ContactStatistics
+    window : (float, float)
+        Analysis section along the track, m.
+    uplift_force : float
+        N.
+    filtered_force : ndarray, shape (n_steps,)
+        The 20 Hz low-pass filtered contact force at every step, N (filtered once, here).
+    """
+
+    static: StaticSolution
+    system: LinearSystem
+    trajectory: Trajectory
+    statistics: ContactStatistics
+    window: tuple[float, float]
+    uplift_force: float
+    filtered_force: NDArray[np.float64]
+
+
+def analysis_window(catenary: CatenaryDefinition, fidelity: Fidelity) -> tuple[float, float]:
+    """Start and end of the central ``analysis_spans`` spans, m."""
+    first = (fidelity.n_spans - fidelity.analysis_spans) // 2
+    return first * catenary.span_length, (first + fidelity.analysis_spans) * catenary.span_length
+
+
+def check_fidelity(catenary: CatenaryDefinition, fidelity: Fidelity) -> None:
+    """Refuse a fidelity outside the model's range, naming the field."""
+    f = fidelity
+    if not (isinstance(f.n_spans, int) and 3 <= f.n_spans <= 200):
+        raise DesignError(f"fidelity.n_spans = {f.n_spans!r}: must be an integer in [3, 200]")
+    if not (isinstance(f.analysis_spans, int) and 1 <= f.analysis_spans <= f.n_spans - 2):
+        raise DesignError(
+            f"fidelity.analysis_spans = {f.analysis_spans!r}: must be an integer in [1, n_spans - 2]"
+        )
+    for name in ("contact_wire_element", "messenger_wire_element"):
+        value = getattr(f, name)
+        if not (0.05 <= value <= 0.5 * catenary.span_length):
+            raise DesignError(
+                f"fidelity.{name} = {value!r}: must lie in [0.05, {0.5 * catenary.span_length}] m"
+            )
+    if not (1e-5 <= f.time_step <= 0.01):
+        raise DesignError(f"fidelity.time_step = {f.time_step!r}: must lie in [1e-5, 0.01] s")
+
+
+def solve_static(catenary: CatenaryDefinition, design: Design, fidelity: Fidelity) -> StaticSolution:
+    """Check the design and find its static shape (raises ShapeFindingError if Newton fails)."""
+    check_design(catenary, design)
+    check_fidelity(catenary, fidelity)
+    return _find_static(catenary, design, fidelity)
+
+
+def _find_static(catenary: CatenaryDefinition, design: Design, fidelity: Fidelity) -> StaticSolution:
+    layout = build_layout(
+        catenary, design, fidelity.n_spans, fidelity.contact_wire_element, fidelity.messenger_wire_element
+    )
+    return find_shape(layout)
+
+
+def check_uplift(pantograph: PantographDefinition, uplift_force: float | None) -> float:
+    """The uplift force to use, N: ``uplift_force``, else the pantograph's; refuses none or one <= 0."""
+    force = pantograph.uplift_force if uplift_force is None else uplift_force
+    if force is None:
+        raise DesignError(
+            f"uplift_force: pantograph '{pantograph.name}' sets none; give one (N > 0) or calibrate it to a "
+            "target mean contact force with calibrate_uplift"
+        )
+    if not (math.isfinite(force) and force > 0.0):
+        raise DesignError(f"uplift_force = {force!r}: must be a finite number > 0 N")
+    return force
+
+
+def simulate_static(
+    static: StaticSolution,
+    pantograph: PantographDefinition,
+    speed: float,
+    fidelity: Fidelity,
+    uplift_force: float,
+    system: LinearSystem | None = None,
+    progress: Callable[[float], None] | None = None,
+    prepared: PreparedPassage | None = None,
+) -> Simulation:
+    """Dynamic passage over a solved static state (the design must be statically feasible).
+
+    ``system`` and ``prepared`` (its factorisation) may be passed to reuse them across passages.
+    """
+    catenary = static.layout.catenary
+    system = linearise(static) if system is None else system
+    trajectory = simulate_passage(
+        system, pantograph, uplift_force, speed, fidelity.time_step, progress=progress, prepared=prepared
+    )
+    window = analysis_window(catenary, fidelity)
+    filtered = filtered_contact_force(trajectory)
+    stats = passage_statistics(trajectory, window, filtered)
+    return Simulation(static, system, trajectory, stats, window, uplift_force, filtered)
+
+
+def simulate(
+    catenary: CatenaryDefinition,
+    pantograph: PantographDefinition,
+    design: Design,
+    speed: float,
+    fidelity: Fidelity,
+    uplift_force: float | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> Simulation:
+    """Shape-finding, linearisation and the pantograph passage at ``speed`` (m/s).
+
+    Raises
+    ------
+    DesignError
+        Invalid design, speed, fidelity or uplift force (before any solve).
+    ShapeFindingError
+        Shape-finding did not converge.
+    ValueError
+        The design is statically infeasible (a dropper in compression or of negative length).
+    """
+    check_speed(catenary, speed)
+    force = check_uplift(pantograph, uplift_force)
+    static = solve_static(catenary, design, fidelity)
+    reason = static.infeasibility()
+    if reason:
+        raise ValueError(f"design is infeasible: {reason}")
+    return simulate_static(static, pantograph, speed, fidelity, force, progress=progress)
+
+
+def evaluate(
+    catenary: CatenaryDefinition,
+    pantograph: PantographDefinition,
+    design: Design,
+    speed: float,
+    fidelity: Fidelity,
+    uplift_force: float | None = None,
+) -> Evaluation:
+    """Simulate one design at one speed (m/s) and return its feasibility and statistics.
+
+    Bad input raises :class:`DesignError` before any solve; an infeasible design (static: compressed
+    dropper, negative dropper length, or a shape-finding that does not converge; dynamic: contact
+    loss in the analysis section) returns ``feasible=False`` with the reason.
+    """
+    check_speed(catenary, speed)
+    force = check_uplift(pantograph, uplift_force)
+    check_design(catenary, design)
+    check_fidelity(catenary, fidelity)
+    return evaluate_unchecked(catenary, pantograph, design, speed, fidelity, force)
+
+
+def evaluate_unchecked(
+    catenary: CatenaryDefinition,
+    pantograph: PantographDefinition,
+    design: Design,
+    speed: float,
+    fidelity: Fidelity,
+    uplift_force: float,
+) -> Evaluation:
+    """:func:`evaluate` without its input checks, for a caller that has made them (a design problem).
+
+    The design must pass :func:`~catenary_env.model.design.check_design`, the speed
+    :func:`~catenary_env.model.design.check_speed`, the fidelity :func:`check_fidelity` and the uplift
+    force (N) :func:`check_uplift`: a design is validated once, at the boundary.
+    """
+    start = time.perf_counter()
+    force = uplift_force  # N, checked by the caller
+    try:
+        static = _find_static(catenary, design, fidelity)
+    except ShapeFindingError as error:
+        return Evaluation(False, f"static: {error}", None, (), (), force, time.perf_counter() - start)
+    lengths, forces = _central_span(static, design)
+    reason = static.infeasibility()
+    if reason:
+        return Evaluation(False, reason, None, lengths, forces, force, time.perf_counter() - start)
+    sim = simulate_static(static, pantograph, speed, fidelity, force)
+    stats = sim.statistics
+    if stats.contact_loss_percent > 0.0:
+        reason = (
+            f"dynamic: contact lost {stats.contact_loss_percent:.3f} % of the time in the analysis section"
+        )
+    position, filtered = _trace(sim)
+    return Evaluation(
+        not reason, reason, stats, lengths, forces, force, time.perf_counter() - start, position, filtered
+    )
+
+
+def _trace(sim: Simulation) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    tr = sim.trajectory
+    inside = np.flatnonzero((tr.position >= sim.window[0]) & (tr.position <= sim.window[1]))
+    every = max(1, inside.size // TRACE_POINTS)
+    pick = inside[::every]
+    filtered = sim.filtered_force[pick]
+    return tuple(float(v) for v in tr.position[pick]), tuple(float(v) for v in filtered)
+
+
+def _central_span(static: StaticSolution, design: Design) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    lay = static.layout
+    central = lay.dropper_span == lay.n_spans // 2
+    return (
+        tuple(float(v) for v in static.dropper_lengths[central]),
+        tuple(float(v) for v in static.dropper_forces[central]),
+    )
+
+
+def calibrate_uplift(
+    catenary: CatenaryDefinition,
+    pantograph: PantographDefinition,
+    design: Design,
+    speed: float,
+    fidelity: Fidelity,
+    target_mean: float,
+    tolerance: float = 0.01,
+) -> float:
+    """The static uplift force (N) for which the mean contact force of ``design`` equals ``target_mean`` (N).
+
+    The mean force is nearly affine in the uplift (the frame spring takes a part), so a secant
+    iteration from ``target_mean`` converges in two or three passages; the static solution and the
+    linear system are computed once.
+
+    Parameters
+    ----------
+    tolerance : float
+        Accepted error of the mean contact force, N.
+    """
+    check_speed(catenary, speed)
+    if not (math.isfinite(target_mean) and target_mean > 0.0):
+        raise DesignError(f"target_mean = {target_mean!r}: must be a finite number > 0 N")
+    static = solve_static(catenary, design, fidelity)
+    reason = static.infeasibility()
+    if reason:
+        raise ValueError(f"cannot calibrate the uplift on an infeasible design: {reason}")
+    system = linearise(static)
+    prepared = prepare_passage(system, fidelity.time_step)
+
+    def mean_force(uplift: float) -> float:
+        return simulate_static(
+            static, pantograph, speed, fidelity, uplift, system, prepared=prepared
+        ).statistics.mean
+
+    x0, f0 = target_mean, mean_force(target_mean) - target_mean
+    x1 = x0 - f0
+    for _ in range(8):
+        f1 = mean_force(x1) - target_mean
+        if abs(f1) < tolerance:
+            return x1
+        slope = (f1 - f0) / (x1 - x0) if x1 != x0 else 1.0
+        x0, f0, x1 = x1, f1, x1 - f1 / slope
+    raise RuntimeError(f"uplift calibration did not reach {tolerance} N: last error {f1:.3f} N at {x1:.2f} N")
+
+
+def en50367_mean_force(speed: float) -> float:
+    """EN 50367 target mean contact force for AC systems, N, at ``speed`` m/s: 0.00097 v² + 70, v in km/h."""
+    v_kmh = speed * 3.6
+    return 0.00097 * v_kmh**2 + 70.0

@@ -1,0 +1,357 @@
+"""A design problem: design variables, bounds, grid, and their mapping to a design.
+
+A :class:`DesignProblem` is data (a catenary preset, the variables, their bounds and grid steps) plus
+the mapping from a variable vector ``x`` (physical units, m) to a :class:`~catenary_env.model.design.Design`.
+Every span is equal and symmetric about mid-span, so a variable sets a dropper and its mirror; dropper 1
+stands next to the span's first support, and the mid-span dropper never moves.
+
+Variables are named ``s`` (pre-sag at mid-span), ``dh_i`` (contact-wire height change at dropper ``i``
+from the level wire, negative = lower) and ``d_i`` (position of dropper ``i`` from the first support).
+Heights live on a 1 mm grid, positions on a 1 cm grid (docs/problems.md, 'Design variables and grid').
+
+Every design of a problem is simulated with the same pantograph uplift force: the one for which the problem's
+reference design (the level wire on the preset's droppers) has the EN 50367 mean contact force at the speed
+(docs/problems.md, 'Reference design and uplift'). It is calibrated once per catenary, speed and fidelity and
+cached in-process.
+
+Examples
+--------
+>>> from catenary_env.problems import PROBLEMS
+>>> problem = PROBLEMS["B1"]
+>>> problem.variables
+('dh_1', 'dh_2', 'dh_3', 'dh_4', 'dh_5')
+>>> problem.snap([0.0104, -0.03, 0.0005, 0.0, 0.0]).tolist()
+[0.01, -0.02, 0.001, 0.0, 0.0]
+>>> problem.design([0.0, 0.0, 0.0, 0.0, -0.005]).contact_wire_offsets[4]
+-0.005
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .. import pipeline
+from ..model.definition import CatenaryDefinition, PantographDefinition
+from ..model.design import Design, DesignError, check_design, check_speed, presag_design, symmetric_design
+from ..pipeline import FIDELITIES, Evaluation, Fidelity, check_fidelity, check_uplift, model_fingerprint
+from .grid import DesignGrid
+from .reference import calibrated_uplift, preset_catenary, preset_pantograph, reference_evaluation
+
+__all__ = ["DesignProblem", "resolve_fidelity"]
+
+
+@dataclass(frozen=True, eq=False)
+class DesignProblem:
+    """A catenary design problem: variables, bounds and grid, and the mapping to a design (docs/problems.md,
+    'The eight problems').
+
+    Attributes
+    ----------
+    name : str
+        Problem id, e.g. ``"B1"``.
+    catenary : str
+        Name of the catenary preset (``"benchmark"`` or ``"stitched"``).
+    n_droppers : int
+        Droppers per span of the problem's designs.
+    variables : tuple of str
+        Variable names: ``"s"`` (pre-sag), ``"dh_i"`` (height change at dropper i), ``"d_i"``
+        (position of dropper i); dropper 1 at the support side.
+    units : tuple of str
+        Unit of each variable (``"m"``).
+    lower, upper : ndarray, shape (n_variables,)
+        Bounds, m, on the grid. Read-only.
+    step : ndarray, shape (n_variables,)
+        Grid step of each variable, m. Read-only.
+    description : str
+        One paragraph for humans.
+    grid : DesignGrid
+        The variables' grid, set from the bounds and steps: snapping, actions, cache keys.
+    """
+
+    name: str
+    catenary: str
+    n_droppers: int
+    variables: tuple[str, ...]
+    units: tuple[str, ...]
+    lower: NDArray[np.float64]
+    upper: NDArray[np.float64]
+    step: NDArray[np.float64]
+    description: str
+    grid: DesignGrid = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        n = len(self.variables)
+        if len(self.units) != n:
+            raise ValueError(f"problem {self.name!r}: units must have {n} values, one per variable")
+        grid = DesignGrid(self.name, self.variables, self.lower, self.upper, self.step)
+        object.__setattr__(self, "grid", grid)
+        for field_name in ("lower", "upper", "step"):  # the grid's read-only arrays
+            object.__setattr__(self, field_name, getattr(grid, field_name))
+        positions, heights = self._split_names()
+        if self.variables == ("s",):
+            return
+        mid = self.n_droppers % 2
+        if positions and 2 * len(positions) + mid != self.n_droppers:
+            raise ValueError(
+                f"problem {self.name!r}: {len(positions)} positions cannot place {self.n_droppers} "
+                "droppers symmetrically"
+            )
+        if heights and len(heights) != self.n_droppers // 2 + mid:
+            raise ValueError(f"problem {self.name!r}: needs {self.n_droppers // 2 + mid} heights")
+
+    # -- data -------------------------------------------------------------------------------------------
+
+    @property
+    def n_variables(self) -> int:
+        return len(self.variables)
+
+    @property
+    def n_levels(self) -> NDArray[np.int64]:
+        """Number of grid points of each variable, bounds included."""
+        return self.grid.n_levels
+
+    @property
+    def catenary_definition(self) -> CatenaryDefinition:
+        """The catenary preset (loaded once per process)."""
+        return preset_catenary(self.catenary)
+
+    @property
+    def pantograph_definition(self) -> PantographDefinition:
+        """The catenary's default pantograph preset (loaded once per process)."""
+        return preset_pantograph(self.catenary_definition.pantograph)
+
+    # -- grid -------------------------------------------------------------------------------------------
+
+    def snap(self, x: ArrayLike) -> NDArray[np.float64]:
+        """Clip ``x`` to the bounds and round it to the grid.
+
+        Ties (a value half-way between two grid points) round up, towards the upper bound.
+
+        Parameters
+        ----------
+        x : array_like, shape (n_variables,)
+            Variables, m. Must be finite.
+
+        Returns
+        -------
+        ndarray, shape (n_variables,)
+            On the grid, m; equal grid points are equal floats.
+        """
+        return self.grid.snap(self._as_vector(x))
+
+    def out_of_bounds(self, x: ArrayLike) -> tuple[str, ...]:
+        """Names of the variables of ``x`` that lie outside the bounds (what :meth:`snap` would clip)."""
+        return self.grid.out_of_bounds(self._as_vector(x))
+
+    def check_variables(self, x: ArrayLike) -> NDArray[np.float64]:
+        """Refuse ``x`` outside the bounds; return it rounded to the grid.
+
+        Raises
+        ------
+        ValueError
+            Wrong count, non-finite values, or a variable outside its bounds (named, with the bounds).
+        """
+        values = self._as_vector(x)
+        outside = self.out_of_bounds(values)
+        problems = [
+            f"{name} = {value!r} {unit}: must lie in [{lo:g}, {hi:g}] {unit}"
+            for name, unit, value, lo, hi in zip(
+                self.variables, self.units, values.tolist(), self.lower, self.upper, strict=True
+            )
+            if name in outside
+        ]
+        if problems:
+            raise ValueError(f"problem {self.name}: " + "; ".join(problems))
+        return self.snap(values)
+
+    def grid_index(self, x: ArrayLike) -> NDArray[np.int64]:
+        """Integer grid coordinates of snapped ``x``: 0 at the lower bound, ``n_levels - 1`` at the upper."""
+        return self.grid.to_index(self._as_vector(x))
+
+    def from_grid_index(self, index: ArrayLike) -> NDArray[np.float64]:
+        """Variables, m, of integer grid coordinates (inverse of :meth:`grid_index`; clipped to the grid)."""
+        return self.grid.from_index(np.clip(np.asarray(index, dtype=np.int64), 0, self.n_levels - 1))
+
+    # -- designs ----------------------------------------------------------------------------------------
+
+    def design(self, x: ArrayLike) -> Design:
+        """The design of ``x`` (checked against the bounds and rounded to the grid).
+
+        Parameters
+        ----------
+        x : array_like, shape (n_variables,)
+            Variables in the order of :attr:`variables`, m.
+
+        Returns
+        -------
+        Design
+            Symmetric, with ``n_droppers`` droppers per span. Not checked against the catenary: see
+            :func:`~catenary_env.model.design.check_design`.
+        """
+        values = dict(zip(self.variables, self.check_variables(x).tolist(), strict=True))
+        catenary = self.catenary_definition
+        if self.variables == ("s",):
+            return presag_design(catenary, values["s"])
+        position_names, height_names = self._split_names()
+        length = catenary.span_length
+        mid_dropper = self.n_droppers % 2 == 1
+        n_half = self.n_droppers // 2
+        if position_names:
+            half_positions = tuple(values[name] for name in position_names)
+        else:
+            half_positions = tuple(catenary.dropper_positions[:n_half])
+        if height_names:
+            half_offsets = tuple(values[name] for name in height_names)
+        else:
+            half_offsets = (0.0,) * (n_half + int(mid_dropper))
+        return symmetric_design(half_positions, half_offsets, length, mid_dropper)
+
+    def reference_design(self) -> Design:
+        """The level contact wire on the preset's droppers (docs/problems.md, 'Reference design and uplift'),
+        also for B3 and SW3."""
+        positions = tuple(self.catenary_definition.dropper_positions)
+        return Design(positions, (0.0,) * len(positions))
+
+    def reference_x(self) -> NDArray[np.float64] | None:
+        """The variables of the reference design, m, or None where the problem cannot express it (B3, SW3)."""
+        if self.n_droppers != len(self.catenary_definition.dropper_positions):
+            return None
+        position_names, _ = self._split_names()
+        half = self.catenary_definition.dropper_positions[: self.n_droppers // 2]
+        positions = iter(half)
+        x = np.array([next(positions) if name in position_names else 0.0 for name in self.variables])
+        if self.out_of_bounds(x):
+            return None
+        return self.snap(x)
+
+    # -- simulation -------------------------------------------------------------------------------------
+
+    def uplift_force(self, speed_kmh: float = 300.0, fidelity: str | Fidelity = "study") -> float:
+        """Pantograph uplift force of the problem at a speed, N: set once on the reference design.
+
+        Calibrated so that the reference design's mean contact force equals the EN 50367 target at
+        ``speed_kmh``; cached per catenary, speed and fidelity in this process.
+        """
+        return calibrated_uplift(
+            self.catenary, self.reference_design(), float(speed_kmh), resolve_fidelity(fidelity)
+        )
+
+    def fingerprint(self) -> str:
+        """Hash of the catenary, pantograph and variables: results are reusable only under the same one."""
+        return model_fingerprint(
+            self.catenary_definition,
+            self.pantograph_definition,
+            self.variables,
+            self.lower.tolist(),
+            self.upper.tolist(),
+            self.step.tolist(),
+        )
+
+    def reference_evaluation(
+        self, speed_kmh: float = 300.0, fidelity: str | Fidelity = "study"
+    ) -> Evaluation:
+        """The reference design's evaluation at a speed (cached in this process)."""
+        return reference_evaluation(
+            self.catenary, self.reference_design(), float(speed_kmh), resolve_fidelity(fidelity)
+        )
+
+    def evaluate(
+        self,
+        x: ArrayLike,
+        speed_kmh: float = 300.0,
+        fidelity: str | Fidelity = "study",
+        uplift_force: float | None = None,
+    ) -> Evaluation:
+        """Simulate the design of ``x`` at a speed.
+
+        Parameters
+        ----------
+        x : array_like, shape (n_variables,)
+            Variables, m; rounded to the grid.
+        speed_kmh : float
+            Train speed, km/h.
+        fidelity : str or Fidelity
+            A name in :data:`~catenary_env.pipeline.FIDELITIES` or a :class:`Fidelity`.
+        uplift_force : float, optional
+            Pantograph uplift force, N. Default: the problem's, :meth:`uplift_force` (pass it to spare
+            worker processes their own calibration).
+
+        Returns
+        -------
+        Evaluation
+            A design that ``x`` within the bounds cannot build on the catenary (only SW3 with
+            ``d_1 = 9.0`` m: dropper 1 at the stitch wire's end) comes back infeasible, with a reason
+            starting ``"design:"``, unsimulated.
+
+        Raises
+        ------
+        ValueError
+            ``x`` of the wrong shape, not finite, or outside the bounds; a speed outside (0, wave speed).
+        """
+        # The boundary: every input is checked here once, then the pipeline's unchecked core runs.
+        design = self.design(x)
+        resolved = resolve_fidelity(fidelity)
+        catenary = self.catenary_definition
+        speed = float(speed_kmh) / 3.6
+        check_speed(catenary, speed)
+        force = self.uplift_force(speed_kmh, resolved) if uplift_force is None else float(uplift_force)
+        try:
+            check_design(catenary, design)
+        except DesignError as error:
+            return Evaluation(False, f"design: {error}", None, (), (), force, 0.0)
+        pantograph = self.pantograph_definition
+        check_uplift(pantograph, force)
+        check_fidelity(catenary, resolved)
+        return pipeline.evaluate_unchecked(catenary, pantograph, design, speed, resolved, force)
+
+    # -- helpers ----------------------------------------------------------------------------------------
+
+    def _as_vector(self, x: ArrayLike) -> NDArray[np.float64]:
+        try:
+            values = np.asarray(x, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"problem {self.name}: x must be {self.n_variables} numbers "
+                f"({', '.join(self.variables)}), got {x!r}"
+            ) from None
+        if values.shape != (self.n_variables,):
+            raise ValueError(
+                f"problem {self.name}: x must have shape ({self.n_variables},) "
+                f"({', '.join(self.variables)}), got shape {values.shape}"
+            )
+        if not np.all(np.isfinite(values)):
+            raise ValueError(f"problem {self.name}: x must be finite, got {values.tolist()}")
+        return values
+
+    def _split_names(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        positions = tuple(v for v in self.variables if v.startswith("d_"))
+        heights = tuple(v for v in self.variables if v.startswith("dh_"))
+        return positions, heights
+
+
+def resolve_fidelity(fidelity: str | Fidelity, n_spans: int | None = None) -> Fidelity:
+    """A :class:`Fidelity` from a name or a record, optionally with another number of spans.
+
+    With ``n_spans``, the analysis section keeps its number of spans where it fits, and shrinks to
+    ``n_spans - 2`` otherwise (one span at each end stays out of the statistics).
+    """
+    if isinstance(fidelity, Fidelity):
+        resolved = fidelity
+    elif fidelity in FIDELITIES:
+        resolved = FIDELITIES[fidelity]
+    else:
+        raise ValueError(f"fidelity = {fidelity!r}: must be one of {', '.join(FIDELITIES)} or a Fidelity")
+    if n_spans is None:
+        return resolved
+    if isinstance(n_spans, bool) or not isinstance(n_spans, int | np.integer) or n_spans < 3:
+        raise ValueError(f"n_spans = {n_spans!r}: must be an integer >= 3")
+    return Fidelity(
+        n_spans=int(n_spans),
+        analysis_spans=min(resolved.analysis_spans, int(n_spans) - 2),
+        contact_wire_element=resolved.contact_wire_element,
+        messenger_wire_element=resolved.messenger_wire_element,
+        time_step=resolved.time_step,
+    )

@@ -1,0 +1,76 @@
+"""The reference design's pantograph setting and evaluation, computed once per process.
+
+Every design of a problem is simulated with the same pantograph uplift force: the one for which the problem's
+reference design (the level contact wire on the preset's droppers) has the EN 50367 mean contact force at the
+speed (docs/problems.md, 'Reference design and uplift'). It is calibrated once per catenary, speed and
+fidelity and cached in-process, as are the presets.
+"""
+
+from __future__ import annotations
+
+import functools
+
+from .. import pipeline
+from ..model.definition import CatenaryDefinition, PantographDefinition
+from ..model.design import Design, check_speed
+from ..model.presets import load_catenary, load_pantograph
+from ..pipeline import Evaluation, Fidelity
+
+__all__ = [
+    "calibrated_uplift",
+    "clear_caches",
+    "preset_catenary",
+    "preset_pantograph",
+    "reference_evaluation",
+]
+
+
+def clear_caches() -> None:
+    """Forget the calibrated uplift forces and reference evaluations of this process."""
+    calibrated_uplift.cache_clear()
+    reference_evaluation.cache_clear()
+
+
+@functools.lru_cache(maxsize=None)
+def preset_catenary(name: str) -> CatenaryDefinition:
+    return load_catenary(name)
+
+
+@functools.lru_cache(maxsize=None)
+def preset_pantograph(name: str) -> PantographDefinition:
+    return load_pantograph(name)
+
+
+@functools.lru_cache(maxsize=256)
+def calibrated_uplift(catenary_name: str, reference: Design, speed_kmh: float, fidelity: Fidelity) -> float:
+    # Keyed by the catenary and its reference design, not by the problem: the problems on one catenary
+    # share the pantograph setting, so B1, B2, B3 calibrate once between them.
+    catenary = preset_catenary(catenary_name)
+    speed = speed_kmh / 3.6
+    check_speed(catenary, speed)
+    return float(
+        pipeline.calibrate_uplift(
+            catenary,
+            preset_pantograph(catenary.pantograph),
+            reference,
+            speed,
+            fidelity,
+            target_mean=pipeline.en50367_mean_force(speed),
+        )
+    )
+
+
+@functools.lru_cache(maxsize=256)
+def reference_evaluation(
+    catenary_name: str, reference: Design, speed_kmh: float, fidelity: Fidelity
+) -> Evaluation:
+    catenary = preset_catenary(catenary_name)
+    force = calibrated_uplift(catenary_name, reference, speed_kmh, fidelity)
+    return pipeline.evaluate(
+        catenary,
+        preset_pantograph(catenary.pantograph),
+        reference,
+        speed_kmh / 3.6,
+        fidelity,
+        uplift_force=force,
+    )

@@ -1,0 +1,1 @@
+"""Shape-finding: the equilibrium of a catenary hanging exactly as designed."""
