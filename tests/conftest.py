@@ -1,6 +1,12 @@
-"""Shared fixtures: short sections and coarse meshes, so that the physics tests stay fast."""
+"""Shared fixtures: short sections and coarse meshes, so that the physics tests stay fast.
+
+Tests of an optional extra skip where it is not installed (:func:`requires`, ``pytest.importorskip``), so
+that ``pip install -e . pytest`` runs the core.
+"""
 
 from __future__ import annotations
+
+import importlib.util
 
 import pytest
 
@@ -8,6 +14,13 @@ from catenary_env.model.design import level_design
 from catenary_env.model.presets import load_catenary, load_pantograph
 from catenary_env.pipeline import Fidelity, solve_static
 from catenary_env.statics.shape_finding import StaticSolution
+
+
+def requires(module: str) -> pytest.MarkDecorator:
+    """Skip a test, or a parameter, where the optional dependency ``module`` is not installed."""
+    missing = importlib.util.find_spec(module) is None
+    return pytest.mark.skipif(missing, reason=f"needs {module} (an optional extra)")
+
 
 SHORT = Fidelity(
     n_spans=5, analysis_spans=1, contact_wire_element=1.0, messenger_wire_element=2.0, time_step=2e-3

@@ -13,20 +13,19 @@ import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
-import gymnasium as gym
 import numpy as np
 import pytest
-from gymnasium.utils.env_checker import check_env
-from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-import catenary_env.envs
-from catenary_env import pipeline
-from catenary_env.analysis.statistics import ContactStatistics
-from catenary_env.envs import CatenaryDesignEnv, env_ids, register_envs
-from catenary_env.envs.design_env import INFEASIBLE_SIGMA_OVER_MEAN
-from catenary_env.model.design import Design, level_design
-from catenary_env.pipeline import Evaluation, en50367_mean_force
-from catenary_env.problems import PROBLEMS, clear_caches, resolve_fidelity
+gym = pytest.importorskip("gymnasium", reason="the environments need gymnasium: pip install -e .[gym]")
+
+import catenary_env.envs  # noqa: E402
+from catenary_env import pipeline  # noqa: E402
+from catenary_env.analysis.statistics import ContactStatistics  # noqa: E402
+from catenary_env.envs import CatenaryDesignEnv, env_ids, register_envs  # noqa: E402
+from catenary_env.envs.design_env import INFEASIBLE_SIGMA_OVER_MEAN  # noqa: E402
+from catenary_env.model.design import Design, level_design  # noqa: E402
+from catenary_env.pipeline import Evaluation, en50367_mean_force  # noqa: E402
+from catenary_env.problems import PROBLEMS, clear_caches, resolve_fidelity  # noqa: E402
 
 register_envs()
 
@@ -363,6 +362,7 @@ def test_vector_env_simulates_every_step(fake_simulator: FakeSimulator, mode: st
 
 
 def test_render_works_right_after_reset_and_after_a_step(fake_simulator: FakeSimulator) -> None:
+    pytest.importorskip("matplotlib", reason="rendering needs matplotlib")
     env = make("Catenary-SW3-v0", render_mode="rgb_array")
     env.reset(seed=0)
     before = env.render()
@@ -388,6 +388,9 @@ def _checker_warnings(caught: list[warnings.WarningMessage]) -> list[str]:
 
 @pytest.mark.parametrize("env_id", IDS)
 def test_gymnasium_check_env(env_id: str) -> None:
+    pytest.importorskip("matplotlib", reason="rendering needs matplotlib")
+    from gymnasium.utils.env_checker import check_env
+
     env = make(env_id, render_mode="rgb_array")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -395,8 +398,17 @@ def test_gymnasium_check_env(env_id: str) -> None:
     assert _checker_warnings(caught) == []
 
 
-@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize(
+    "env_id",
+    # One env in every run; the others behind the slow marker (each calibrates its catenary: 10-50 s).
+    [
+        env_id if env_id == "Catenary-B1-v0" else pytest.param(env_id, marks=pytest.mark.slow)
+        for env_id in IDS
+    ],
+)
 def test_stable_baselines3_check_env(env_id: str) -> None:
+    env_checker = pytest.importorskip("stable_baselines3.common.env_checker")
+    sb3_check_env = env_checker.check_env
     env = make(env_id)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

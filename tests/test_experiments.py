@@ -3,8 +3,12 @@
 
 from __future__ import annotations
 
-from experiments import convergence, presag, validation
-from experiments.common import write_csv
+import pytest
+
+pytest.importorskip("matplotlib", reason="the studies' figures need matplotlib")
+
+from experiments import convergence, presag, validation  # noqa: E402
+from experiments.common import write_csv  # noqa: E402
 
 
 def test_validation_report_reads_only_its_csv(tmp_path):

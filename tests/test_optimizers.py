@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from conftest import requires
 
 from optimizers import OPTIMIZERS, GridSpace, Outcome, RunStore, StoreError, optimize
 from optimizers.base import OptimizerSpec, register_optimizer
@@ -27,9 +28,17 @@ from optimizers.ga import (
     rank_expectation,
     stochastic_uniform,
 )
-from optimizers.nevergrad_adapters import NGOpt, ngopt_fault
+from optimizers.nevergrad_adapters import NevergradOptimizer, NGOpt, ngopt_fault
 from optimizers.progress import ProgressDisplay
 from optimizers.synthetic import QuadraticProblem, get_synthetic_problem, simulate_quadratic
+
+
+def optimizer_param(name: str) -> object:
+    """An optimiser's name as a test parameter, skipped where nevergrad (the optim extra) is missing."""
+    if issubclass(OPTIMIZERS[name].optimizer_class, NevergradOptimizer):
+        return pytest.param(name, marks=requires("nevergrad"))
+    return name
+
 
 QUADRATIC = get_synthetic_problem("synthetic-quadratic")
 
@@ -42,7 +51,7 @@ def _comparable(history):
 # -- every registered optimiser: one contract, no skip list ---------------------------------------------
 
 
-@pytest.mark.parametrize("name", sorted(OPTIMIZERS))
+@pytest.mark.parametrize("name", [optimizer_param(name) for name in sorted(OPTIMIZERS)])
 def test_optimizer_respects_budget_and_is_reproducible(name):
     budget = 24
     first = optimize(QUADRATIC, name, budget=budget, seed=5, fidelity="test")
@@ -59,7 +68,7 @@ def test_optimizer_respects_budget_and_is_reproducible(name):
     assert first.feasible and first.best_sigma == min(r.sigma for r in first.history if r.feasible)
 
 
-@pytest.mark.parametrize("name", sorted(OPTIMIZERS))
+@pytest.mark.parametrize("name", [optimizer_param(name) for name in sorted(OPTIMIZERS)])
 def test_optimizer_depends_on_seed(name):
     a = optimize(QUADRATIC, name, budget=16, seed=1, fidelity="test")
     b = optimize(QUADRATIC, name, budget=16, seed=2, fidelity="test")
@@ -73,6 +82,7 @@ def test_registry_refuses_duplicates():
         OPTIMIZERS.update({"cma": OPTIMIZERS["cma"]})
 
 
+@requires("nevergrad")
 def test_ngopt_selects_a_working_optimizer_on_the_grid():
     assert "ngopt" in OPTIMIZERS  # and the contract tests above run it
     for n in (1, 3, 5):
@@ -297,6 +307,7 @@ def test_other_schema_version_is_refused(tmp_path):
         RunStore(path)
 
 
+@requires("nevergrad")
 def test_store_keeps_every_evaluation(tmp_path):
     path = tmp_path / "runs.sqlite"
     result = optimize(QUADRATIC, "de", budget=30, seed=0, store=path)
@@ -341,6 +352,7 @@ class _CountingProblem:
         return simulate_quadratic(self.inner, x, speed_kmh, fidelity)
 
 
+@requires("nevergrad")
 def test_cache_simulates_a_grid_design_once(tmp_path):
     problem = _CountingProblem(QUADRATIC, [])
     path = tmp_path / "runs.sqlite"
@@ -370,7 +382,7 @@ def test_grid_keys_ignore_float_noise():
     assert space.snap([0.0025, 0.5, -1.0]).tolist() == [0.003, 0.02, -0.02]  # ties up, clipped
 
 
-@pytest.mark.parametrize("name", ["ga", "cma", "de"])
+@pytest.mark.parametrize("name", [optimizer_param(name) for name in ("ga", "cma", "de")])
 def test_resume_replays_a_truncated_run(tmp_path, name):
     path = tmp_path / "runs.sqlite"
     full = optimize(QUADRATIC, name, budget=200, seed=4, store=path)
@@ -387,6 +399,7 @@ def test_resume_replays_a_truncated_run(tmp_path, name):
     assert len(problem.calls) == sum(r.charged and not r.cached for r in lost)
 
 
+@requires("nevergrad")
 def test_resume_refuses_a_run_that_does_not_replay(tmp_path):
     path = tmp_path / "runs.sqlite"
     full = optimize(QUADRATIC, "random", budget=10, seed=4, store=path)
@@ -431,7 +444,17 @@ def test_bad_options_are_refused():
 
 @pytest.mark.parametrize(
     "module",
-    ["base", "evaluation", "ga", "problem", "runner", "store", "synthetic", "rl", "__init__"],
+    [
+        "base",
+        "evaluation",
+        "ga",
+        "problem",
+        pytest.param("runner", marks=requires("nevergrad")),
+        "store",
+        "synthetic",
+        "rl",
+        "__init__",
+    ],
 )
 def test_docstring_examples_run(module):
     import doctest

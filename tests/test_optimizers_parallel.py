@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 import pytest
+from conftest import requires
 
 from optimizers import optimize
 from optimizers.evaluation import DaskBackend, InProcessBackend, ProcessPoolBackend
@@ -42,7 +43,7 @@ def test_backends_evaluate_a_batch_identically(cluster):
     assert _outcomes(DaskBackend(cluster.scheduler_address)) == reference
 
 
-@pytest.mark.parametrize("optimizer", ["ga", "de"])
+@pytest.mark.parametrize("optimizer", ["ga", pytest.param("de", marks=requires("nevergrad"))])
 def test_runs_are_identical_on_every_backend(cluster, optimizer):
     local = optimize(PROBLEM, optimizer, budget=120, seed=2, n_workers=1)
     processes = optimize(PROBLEM, optimizer, budget=120, seed=2, n_workers=2)

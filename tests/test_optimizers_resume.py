@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 
 import pytest
+from conftest import requires
 
 from optimizers import EvaluationRecord, optimize
 from optimizers.cli import add_arguments, add_parser, run
@@ -86,6 +87,7 @@ def _parse(argv: list[str]) -> argparse.Namespace:
     return parser.parse_args(argv)
 
 
+@requires("nevergrad")  # the run uses differential evolution
 def test_cli_runs_and_prints_json(tmp_path, capsys):
     store = tmp_path / "runs.sqlite"
     argv = ["synthetic-quadratic", "--optimizer", "de", "--budget", "20", "--seed", "1",

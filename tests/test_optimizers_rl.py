@@ -116,6 +116,7 @@ def test_ppo_resumes_an_interrupted_training(tmp_path):
         )
 
 
+@pytest.mark.slow  # 50 s of PPO training; the budget and resume tests above keep PPO in every run
 def test_speed_conditioned_policy_learns_the_design_per_speed():
     options = PPOOptions(n_steps=256, batch_size=64, n_epochs=10, learning_rate=1e-3, net_arch=(32, 32))
     policy, result = train_design_policy(SPEED_RANGE, PROBLEM, budget=2048, seed=0, options=options)

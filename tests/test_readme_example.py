@@ -15,6 +15,8 @@ from pathlib import Path
 
 import pytest
 
+pytest.importorskip("gymnasium", reason="the environments need gymnasium")
+
 ROOT = Path(__file__).resolve().parents[1]
 SOURCES = [ROOT / "docs" / "envs_table.md", ROOT / "README.md"]
 BLOCK = re.compile(r"```python\n(.*?)```", re.DOTALL)
