@@ -12,7 +12,6 @@ from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy import signal
 
 if TYPE_CHECKING:
     from ..dynamics.newmark import Trajectory
@@ -73,6 +72,9 @@ def lowpass(force: np.ndarray, time_step: float, cutoff: float = CUTOFF_HZ) -> n
     cutoff : float
         -3 dB frequency of the applied (forward-backward) filter, Hz.
     """
+    # Imported here, not at the top: importing scipy.signal takes 1.5 s (it loads scipy.stats).
+    from scipy import signal
+
     # Forward and backward passes square the magnitude response; set each pass's cut-off so that
     # the applied (zero-phase) filter is -3 dB at ``cutoff``, the usual meaning of a cut-off
     # frequency. A pass at ``cutoff`` itself would put the applied filter at -6 dB there.
