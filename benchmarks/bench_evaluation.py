@@ -1,15 +1,16 @@
 """Benchmark: one full evaluation of a catenary design (docs/performance.md, 'Benchmark').
 
-Shape-finding, linearisation, factorisation (with the unit dropper responses), the pantograph
-passage and the statistics of the "benchmark" preset at 300 km/h, Δt = 1 ms, on the study mesh.
-Prints the median over several runs of each phase, the real-time factor, the memory peak, the
-time for several section lengths, and the passage's time with the compiled (numba) and the numpy
-backend measured in the same process, on the same prepared system, alternately, with the largest
-difference of their contact forces.
+Shape-finding, linearisation, preparation (the exact model's factorisation with the unit dropper
+responses, or the span-mode model's reduction and Schur complements), the pantograph passage and the
+statistics of the "benchmark" preset at 300 km/h, Δt = 1 ms, on the study mesh, for both models in
+the same run, alternately (docs/performance.md, 'Model fidelities'). Prints the median over several
+runs of each phase, the real-time factor, the ratio of the two models, the memory peak, the time for
+several section lengths, and the exact passage's compiled (numba) and numpy backends on the same
+prepared system, alternately, with the largest difference of their contact forces.
 
-Scaling: a step costs in proportion to the DOFs (the banded solve and the products are linear),
-so the passage's time per step and DOF must stay flat; the passage itself has as many steps as
-the section is long, so its time grows as the square of the number of spans.
+Scaling: a step of the exact model costs in proportion to the DOFs, so its passage grows as the
+square of the number of spans; a step of the span-mode model costs in proportion to the spans' kept
+modes, most of them the far field's, so its passage also grows faster than the spans.
 
     python benchmarks/bench_evaluation.py               # 20 spans, 5 runs, spans 10/20/40
     python benchmarks/bench_evaluation.py --runs 3 --spans 20 --json
@@ -30,6 +31,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
+import dataclasses  # noqa: E402
 import json  # noqa: E402
 import resource  # noqa: E402
 import statistics  # noqa: E402
@@ -42,14 +44,16 @@ import numpy as np  # noqa: E402
 from catenary_env.analysis.statistics import passage_statistics  # noqa: E402
 from catenary_env.dynamics.linear_system import linearise  # noqa: E402
 from catenary_env.dynamics.passage import prepare_passage, simulate_passage  # noqa: E402
+from catenary_env.dynamics.reduced_passage import simulate_reduced_passage  # noqa: E402
 from catenary_env.fem.layout import Layout, build_layout  # noqa: E402
 from catenary_env.model.definition import CatenaryDefinition  # noqa: E402
 from catenary_env.model.design import level_design, presag_design  # noqa: E402
 from catenary_env.model.presets import load_catenary, load_pantograph  # noqa: E402
-from catenary_env.pipeline import Fidelity, analysis_window, evaluate  # noqa: E402
+from catenary_env.pipeline import Fidelity, analysis_window, evaluate, prepare_dynamics  # noqa: E402
 from catenary_env.statics.shape_finding import find_shape  # noqa: E402
 
-PHASES = ("shape_finding", "linearisation", "factorisation", "passage", "statistics")
+PHASES = ("shape_finding", "linearisation", "preparation", "passage", "statistics")
+MODELS = ("span-modes", "exact")
 
 
 def level_layout(catenary: CatenaryDefinition, n_spans: int, fidelity: Fidelity) -> Layout:
@@ -66,7 +70,7 @@ def level_layout(catenary: CatenaryDefinition, n_spans: int, fidelity: Fidelity)
 def one_evaluation(
     preset: str, n_spans: int, speed_kmh: float, uplift: float, fidelity: Fidelity, backend: str
 ) -> dict[str, float]:
-    """Time each phase of one evaluation, s; also returns σ to show the runs agree."""
+    """Time each phase of one evaluation on ``fidelity.dynamics``' model, s; also returns σ."""
     catenary = load_catenary(preset)
     pantograph = load_pantograph(catenary.pantograph)
     times: dict[str, float] = {}
@@ -77,12 +81,21 @@ def one_evaluation(
     system = linearise(static)
     times["linearisation"] = time.perf_counter() - t
     t = time.perf_counter()
-    prepared = prepare_passage(system, fidelity.time_step)
-    times["factorisation"] = time.perf_counter() - t
+    prepared = prepare_dynamics(system, fidelity)
+    times["preparation"] = time.perf_counter() - t
     t = time.perf_counter()
-    trajectory = simulate_passage(
-        system, pantograph, uplift, speed_kmh / 3.6, fidelity.time_step, prepared=prepared, backend=backend
-    )
+    if fidelity.dynamics == "exact":
+        trajectory = simulate_passage(
+            system,
+            pantograph,
+            uplift,
+            speed_kmh / 3.6,
+            fidelity.time_step,
+            prepared=prepared,
+            backend=backend,
+        )
+    else:
+        trajectory = simulate_reduced_passage(prepared, pantograph, uplift, speed_kmh / 3.6, backend=backend)
     times["passage"] = time.perf_counter() - t
     t = time.perf_counter()
     window = analysis_window(catenary, Fidelity(n_spans=n_spans, analysis_spans=max(1, n_spans // 2)))
@@ -230,6 +243,39 @@ def memory_peak(
     return peak / 2**20
 
 
+def measure_models(
+    args: argparse.Namespace, fidelities: dict[str, Fidelity], spans: list[int]
+) -> dict[str, dict[int, dict[str, float]]]:
+    """Medians of each model's phases per section length; the exact model on the main section (and
+    ``--exact-spans``) only. The models run alternately, so that the machine's drift hits both."""
+    results: dict[str, dict[int, dict[str, float]]] = {model: {} for model in MODELS}
+    for n in spans:
+        models = MODELS if n in args.exact_spans or n == args.main_spans else ("span-modes",)
+        runs: dict[str, list[dict[str, float]]] = {model: [] for model in models}
+        for _ in range(args.runs):  # the models alternately, so that the machine's drift hits both
+            for model in models:
+                runs[model].append(
+                    one_evaluation(args.preset, n, args.speed, args.uplift, fidelities[model], args.backend)
+                )
+        for model in models:
+            med = {key: statistics.median(r[key] for r in runs[model]) for key in runs[model][0]}
+            med["min_total"] = min(r["total"] for r in runs[model])
+            med["max_total"] = max(r["total"] for r in runs[model])
+            med["real_time_factor"] = med["total"] / med["simulated_time"]
+            med["passage_per_step_us"] = 1e6 * med["passage"] / (med["steps"] - 1)
+            med["passage_per_step_dof_ns"] = 1e3 * med["passage_per_step_us"] / med["n_dofs"]
+            results[model][n] = med
+            if not args.json:
+                print(
+                    f"{model:<10} {n:3d} spans: {med['n_dofs']:.0f} DOFs, median {med['total']:.2f} s "
+                    f"(min {med['min_total']:.2f}, max {med['max_total']:.2f}) over {args.runs} runs, "
+                    f"passage {med['passage']:.2f} s ({med['passage_per_step_us']:.0f} µs/step), "
+                    f"real-time factor {med['real_time_factor']:.2f}, σ = {med['sigma']:.3f} N",
+                    flush=True,
+                )
+    return results
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--preset", default="benchmark", help="catenary preset (default: benchmark)")
@@ -267,36 +313,27 @@ def main() -> int:
         default=[1, os.cpu_count() or 1],
         help="process-pool sizes for the batch throughput (default: 1 and the CPU count)",
     )
+    parser.add_argument(
+        "--exact-spans",
+        type=int,
+        nargs="*",
+        default=[],
+        help="section lengths on which the exact model runs too (default: the main section only)",
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON summary")
     args = parser.parse_args()
-    fidelity = Fidelity()  # the study mesh: 0.5 m / 1.0 m elements, 1 ms
+    study = Fidelity()  # the study mesh: 0.5 m / 1.0 m elements, 1 ms, the span-mode model
+    fidelities = {"span-modes": study, "exact": dataclasses.replace(study, dynamics="exact")}
+    fidelity = fidelities["exact"]
     spans = sorted(set(args.spans) | {args.main_spans})
 
     t = time.perf_counter()
-    one_evaluation(args.preset, 3, args.speed, args.uplift, fidelity, args.backend)  # imports, numba cache
+    for f in fidelities.values():  # imports, numba cache
+        one_evaluation(args.preset, 3, args.speed, args.uplift, f, args.backend)
     warm_up = time.perf_counter() - t
-    results = {}
-    for n in spans:
-        runs = [
-            one_evaluation(args.preset, n, args.speed, args.uplift, fidelity, args.backend)
-            for _ in range(args.runs)
-        ]
-        med = {key: statistics.median(r[key] for r in runs) for key in runs[0]}
-        med["min_total"] = min(r["total"] for r in runs)
-        med["max_total"] = max(r["total"] for r in runs)
-        med["real_time_factor"] = med["total"] / med["simulated_time"]
-        med["passage_per_step_us"] = 1e6 * med["passage"] / (med["steps"] - 1)
-        med["passage_per_step_dof_ns"] = 1e3 * med["passage_per_step_us"] / med["n_dofs"]
-        results[n] = med
-        if not args.json:
-            print(
-                f"{n:3d} spans: {med['n_dofs']:.0f} DOFs, median {med['total']:.2f} s "
-                f"(min {med['min_total']:.2f}, max {med['max_total']:.2f}) over {args.runs} runs, "
-                f"passage {med['passage']:.2f} s ({med['passage_per_step_us']:.0f} µs/step), "
-                f"real-time factor {med['real_time_factor']:.2f}, σ = {med['sigma']:.3f} N",
-                flush=True,
-            )
-    main = results[args.main_spans]
+    results = measure_models(args, fidelities, spans)
+    main = results["exact"][args.main_spans]
+    reduced = results["span-modes"][args.main_spans]
     comparison = None
     if args.numpy_runs > 0:
         comparison = backend_comparison(
@@ -304,17 +341,35 @@ def main() -> int:
         )
     floor = solve_floor(args.preset, args.main_spans, fidelity)
     if floor is not None:
-        steps = main["steps"] - 1
-        floor["passage_floor_s"] = floor["solve_per_step_us"] * 1e-6 * steps
+        floor["passage_floor_s"] = floor["solve_per_step_us"] * 1e-6 * (main["steps"] - 1)
     batch = None
     if args.batch > 0:
-        batch_fidelity = Fidelity(n_spans=args.main_spans, analysis_spans=max(1, args.main_spans // 2))
+        batch_fidelity = dataclasses.replace(
+            study, n_spans=args.main_spans, analysis_spans=max(1, args.main_spans // 2)
+        )
         batch = batch_throughput(
             args.preset, args.batch, sorted(set(args.workers)), args.speed, args.uplift, batch_fidelity
         )
-    peak = memory_peak(args.preset, args.main_spans, args.speed, args.uplift, fidelity, args.backend)
+    peak = {
+        model: memory_peak(
+            args.preset, args.main_spans, args.speed, args.uplift, fidelities[model], args.backend
+        )
+        for model in MODELS
+    }
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    per_span = {n: results[n]["total"] / n for n in spans}
+
+    def figures(med: dict[str, float]) -> dict[str, object]:
+        return {
+            "phases_median_s": {p: med[p] for p in PHASES},
+            "total_median_s": med["total"],
+            "total_min_s": med["min_total"],
+            "total_max_s": med["max_total"],
+            "passage_per_step_us": med["passage_per_step_us"],
+            "real_time_factor": med["real_time_factor"],
+            "n_dofs": med["n_dofs"],
+            "sigma_n": med["sigma"],
+        }
+
     summary = {
         "preset": args.preset,
         "speed_kmh": args.speed,
@@ -322,23 +377,22 @@ def main() -> int:
         "runs": args.runs,
         "main_spans": args.main_spans,
         "warm_up_s": warm_up,
-        "phases_median_s": {p: main[p] for p in PHASES},
-        "total_median_s": main["total"],
-        "passage_per_step_us": main["passage_per_step_us"],
-        "real_time_factor": main["real_time_factor"],
         "simulated_time_s": main["simulated_time"],
-        "n_dofs": main["n_dofs"],
+        "models": {model: figures(results[model][args.main_spans]) for model in MODELS},
+        "study_over_exact": reduced["total"] / main["total"],
         "memory_peak_traced_mib": peak,
         "process_max_rss_mib": rss,
         "scaling": {
-            str(n): {
-                "total_median_s": results[n]["total"],
-                "passage_median_s": results[n]["passage"],
-                "per_span_s": per_span[n],
-                "passage_per_step_us": results[n]["passage_per_step_us"],
-                "passage_per_step_dof_ns": results[n]["passage_per_step_dof_ns"],
+            model: {
+                str(n): {
+                    "total_median_s": med["total"],
+                    "passage_median_s": med["passage"],
+                    "per_span_s": med["total"] / n,
+                    "passage_per_step_us": med["passage_per_step_us"],
+                }
+                for n, med in sorted(results[model].items())
             }
-            for n in spans
+            for model in MODELS
         },
         "backends": comparison,
         "solve_floor": floor,
@@ -349,21 +403,31 @@ def main() -> int:
         return 0
     print(
         f"\n{args.main_spans} spans at {args.speed:g} km/h ({main['simulated_time']:.1f} s simulated), "
-        f"backend {args.backend}, medians:"
+        "medians:"
     )
+    print(f"  {'phase':<14} {'span-modes':>10} {'exact':>10}")
     for p in PHASES:
-        print(f"  {p:<14} {main[p]:8.3f} s  ({100 * main[p] / main['total']:4.1f} %)")
-    print(f"  {'total':<14} {main['total']:8.3f} s, real-time factor {main['real_time_factor']:.2f}")
-    print(f"warm-up (imports, numba cache or compilation, 3 spans): {warm_up:.1f} s")
-    print(f"memory: traced peak {peak:.0f} MiB, process max RSS {rss:.0f} MiB")
-    print("scaling (time per span, s): " + ", ".join(f"{n}: {per_span[n]:.3f}" for n in spans))
+        print(f"  {p:<14} {reduced[p]:9.3f}s {main[p]:9.3f}s")
+    print(f"  {'total':<14} {reduced['total']:9.3f}s {main['total']:9.3f}s")
     print(
-        "scaling (passage per step and DOF, ns): "
-        + ", ".join(f"{n}: {results[n]['passage_per_step_dof_ns']:.1f}" for n in spans)
+        f"span-modes / exact = {reduced['total'] / main['total']:.3f} "
+        f"({main['total'] / reduced['total']:.1f}x faster); real-time factors "
+        f"{reduced['real_time_factor']:.2f} and {main['real_time_factor']:.2f}; "
+        f"σ {reduced['sigma']:.3f} N and {main['sigma']:.3f} N"
     )
+    print(f"warm-up (imports, numba cache or compilation, 3 spans): {warm_up:.1f} s")
+    print(
+        f"memory: traced peak {peak['span-modes']:.0f} MiB (span-modes), {peak['exact']:.0f} MiB (exact); "
+        f"process max RSS {rss:.0f} MiB"
+    )
+    for model in MODELS:
+        print(
+            f"scaling, {model} (total per span, s): "
+            + ", ".join(f"{n}: {med['total'] / n:.3f}" for n, med in sorted(results[model].items()))
+        )
     if comparison is not None:
         print(
-            f"passage, {args.main_spans} spans, {comparison['runs']} run(s) each, alternately: "
+            f"exact passage, {args.main_spans} spans, {comparison['runs']} run(s) each, alternately: "
             f"numba {comparison['numba_passage_median_s']:.2f} s, "
             f"numpy {comparison['numpy_passage_median_s']:.2f} s, "
             f"numba / numpy = {comparison['numba_over_numpy']:.3f} ({comparison['speed_up']:.1f}x), "
@@ -374,7 +438,7 @@ def main() -> int:
             f"banded solve alone ({floor['factor_mib']:.1f} MiB of factor read per step): "
             f"{floor['solve_per_step_us']:.0f} µs/step at best, "
             f"{floor['passage_floor_s']:.2f} s over the {args.main_spans}-span passage: "
-            "the floor of any method that solves the whole section every step"
+            "the floor of the exact method, which solves the whole section every step"
         )
     for n_workers, b in (batch or {}).items():
         print(

@@ -15,6 +15,7 @@ Bad input exits with status 2 and a message naming the field and its range, befo
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import importlib.metadata
 import json
 import shutil
@@ -90,8 +91,9 @@ def _fidelity_arguments(parser: argparse.ArgumentParser) -> None:
         "--fidelity",
         choices=sorted(FIDELITIES),
         default=None,
-        help="'study': 20 spans, 0.5 m contact-wire elements, 1 ms step; 'test': 5 spans, coarse "
-        "(default: the preset's own number of spans with the study mesh)",
+        help="'study': 20 spans, 0.5 m contact-wire elements, 1 ms step, the span-mode (reduced) dynamics; "
+        "'reference': the same on the exact dynamics; 'test': 5 spans, coarse, exact "
+        "(default: the preset's own number of spans with the study mesh and the span-mode dynamics)",
     )
     group.add_argument("--spans", type=int, metavar="N", help="number of spans in the section (overrides)")
     group.add_argument("--analysis-spans", type=int, metavar="N", help="central spans analysed (overrides)")
@@ -118,7 +120,8 @@ def _fidelity(catenary: CatenaryDefinition, args: argparse.Namespace) -> Fidelit
     else:
         base = Fidelity(n_spans=catenary.n_spans, analysis_spans=catenary.analysis_spans)
     element = base.contact_wire_element if args.element is None else args.element
-    return Fidelity(
+    return dataclasses.replace(
+        base,
         n_spans=base.n_spans if args.spans is None else args.spans,
         analysis_spans=base.analysis_spans if args.analysis_spans is None else args.analysis_spans,
         contact_wire_element=element,

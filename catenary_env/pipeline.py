@@ -21,14 +21,21 @@ from .analysis.statistics import ContactStatistics, filtered_contact_force, pass
 from .dynamics.linear_system import LinearSystem, linearise
 from .dynamics.newmark import Trajectory
 from .dynamics.passage import PreparedPassage, prepare_passage, simulate_passage
+from .dynamics.reduced_passage import (
+    PreparedReducedPassage,
+    prepare_reduced_passage,
+    simulate_reduced_passage,
+)
+from .dynamics.span_modes import reduce_system
 from .fem.layout import build_layout
 from .model.definition import CatenaryDefinition, PantographDefinition
 from .model.design import Design, DesignError, check_design, check_speed
 from .statics.shape_finding import ShapeFindingError, StaticSolution, find_shape
 
-PHYSICS_REVISION = 1
+PHYSICS_REVISION = 2
 """Raised whenever a change of the simulator changes its results, so that stored results of older
-revisions are not reused (it is part of :func:`model_fingerprint`)."""
+revisions are not reused (it is part of :func:`model_fingerprint`). 2: the "study" fidelity runs the
+span-mode model (docs/performance.md, 'Model fidelities')."""
 
 
 def model_fingerprint(*records: object) -> str:
@@ -52,6 +59,13 @@ def model_fingerprint(*records: object) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:12]
 
 
+NEAR_CUTOFF = 500.0
+"""Hz: modes kept near the pantograph (the convergence study, docs/performance.md)."""
+FAR_CUTOFF = 50.0
+"""Hz: modes kept in the spans away from the pantograph."""
+DYNAMICS = ("span-modes", "exact")
+
+
 @dataclass(frozen=True)
 class Fidelity:
     """Model size and resolution.
@@ -68,6 +82,14 @@ class Fidelity:
         Largest messenger-wire element length, m.
     time_step : float
         Newmark time step, s.
+    dynamics : {"span-modes", "exact"}
+        The passage's model: ``"exact"``, every DOF every step (the reference), or ``"span-modes"``,
+        the reduced model with its accuracy contract (docs/performance.md, 'Model fidelities').
+    near_cutoff, far_cutoff : float
+        Span-mode model: the highest mode frequency kept in the spans near the pantograph and in the
+        others, Hz (set once by the convergence study, ``benchmarks/fidelity_convergence.py``).
+    near_spans : int
+        Span-mode model: spans on each side of the pantograph's that keep the near cut-off.
     """
 
     n_spans: int = 20
@@ -75,15 +97,26 @@ class Fidelity:
     contact_wire_element: float = 0.5
     messenger_wire_element: float = 1.0
     time_step: float = 1e-3
+    dynamics: str = "span-modes"
+    near_cutoff: float = NEAR_CUTOFF
+    far_cutoff: float = FAR_CUTOFF
+    near_spans: int = 1
 
 
 FIDELITIES: dict[str, Fidelity] = {
-    # The design studies' setting: 20 spans, statistics on the 10 central ones (docs/performance.md, 'Model
-    # fidelities').
+    # The design studies' setting: 20 spans, statistics on the 10 central ones, the span-mode model
+    # (docs/performance.md, 'Model fidelities').
     "study": Fidelity(),
+    # The same section on the exact model: the yardstick, and the confirmation of final designs.
+    "reference": Fidelity(dynamics="exact"),
     # Small enough for unit tests: a short section and a coarse mesh; not for design conclusions.
     "test": Fidelity(
-        n_spans=5, analysis_spans=1, contact_wire_element=1.5, messenger_wire_element=3.0, time_step=2e-3
+        n_spans=5,
+        analysis_spans=1,
+        contact_wire_element=1.5,
+        messenger_wire_element=3.0,
+        time_step=2e-3,
+        dynamics="exact",
     ),
 }
 
@@ -178,6 +211,17 @@ def check_fidelity(catenary: CatenaryDefinition, fidelity: Fidelity) -> None:
             )
     if not (1e-5 <= f.time_step <= 0.01):
         raise DesignError(f"fidelity.time_step = {f.time_step!r}: must lie in [1e-5, 0.01] s")
+    if f.dynamics not in DYNAMICS:
+        raise DesignError(f"fidelity.dynamics = {f.dynamics!r}: must be one of {', '.join(DYNAMICS)}")
+    if f.dynamics == "span-modes":
+        if not (0.0 < f.far_cutoff <= f.near_cutoff):
+            raise DesignError(
+                f"fidelity.far_cutoff = {f.far_cutoff!r}: must lie in (0, near_cutoff = {f.near_cutoff!r}] Hz"
+            )
+        if not (isinstance(f.near_spans, int) and 0 <= f.near_spans < f.n_spans):
+            raise DesignError(
+                f"fidelity.near_spans = {f.near_spans!r}: must be an integer in [0, n_spans - 1]"
+            )
 
 
 def solve_static(catenary: CatenaryDefinition, design: Design, fidelity: Fidelity) -> StaticSolution:
@@ -215,21 +259,35 @@ def simulate_static(
     uplift_force: float,
     system: LinearSystem | None = None,
     progress: Callable[[float], None] | None = None,
-    prepared: PreparedPassage | None = None,
+    prepared: PreparedPassage | PreparedReducedPassage | None = None,
 ) -> Simulation:
     """Dynamic passage over a solved static state (the design must be statically feasible).
 
-    ``system`` and ``prepared`` (its factorisation) may be passed to reuse them across passages.
+    ``system`` and ``prepared`` (from :func:`prepare_dynamics`) may be passed to reuse them across
+    passages.
     """
     catenary = static.layout.catenary
     system = linearise(static) if system is None else system
-    trajectory = simulate_passage(
-        system, pantograph, uplift_force, speed, fidelity.time_step, progress=progress, prepared=prepared
-    )
+    prepared = prepare_dynamics(system, fidelity) if prepared is None else prepared
+    if isinstance(prepared, PreparedReducedPassage):
+        trajectory = simulate_reduced_passage(prepared, pantograph, uplift_force, speed, progress=progress)
+    else:
+        trajectory = simulate_passage(
+            system, pantograph, uplift_force, speed, fidelity.time_step, progress=progress, prepared=prepared
+        )
     window = analysis_window(catenary, fidelity)
     filtered = filtered_contact_force(trajectory)
     stats = passage_statistics(trajectory, window, filtered)
     return Simulation(static, system, trajectory, stats, window, uplift_force, filtered)
+
+
+def prepare_dynamics(system: LinearSystem, fidelity: Fidelity) -> PreparedPassage | PreparedReducedPassage:
+    """The design's part of the passage for the fidelity's model: the exact method's factorisation, or
+    the span modes and their Schur complements (docs/performance.md, 'Model fidelities')."""
+    if fidelity.dynamics == "exact":
+        return prepare_passage(system, fidelity.time_step)
+    reduced = reduce_system(system, fidelity.near_cutoff, fidelity.far_cutoff)
+    return prepare_reduced_passage(reduced, fidelity.time_step, fidelity.near_spans)
 
 
 def simulate(
@@ -364,7 +422,7 @@ def calibrate_uplift(
     if reason:
         raise ValueError(f"cannot calibrate the uplift on an infeasible design: {reason}")
     system = linearise(static)
-    prepared = prepare_passage(system, fidelity.time_step)
+    prepared = prepare_dynamics(system, fidelity)
 
     def mean_force(uplift: float) -> float:
         return simulate_static(

@@ -112,6 +112,7 @@ def validate(
             contact_wire_element=0.5,
             messenger_wire_element=1.0,
             time_step=1e-3,
+            dynamics="exact",
         )
     ranges = load_ranges()
     rows = []

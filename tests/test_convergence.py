@@ -21,6 +21,7 @@ def sigmas(benchmark_catenary, benchmark_pantograph_definition):
             contact_wire_element=element,
             messenger_wire_element=2 * element,
             time_step=dt,
+            dynamics="exact",  # the reference model's discretisation
         )
         sim = simulate(
             benchmark_catenary,

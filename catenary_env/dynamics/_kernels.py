@@ -41,8 +41,8 @@ import numpy as np
 import scipy.sparse as sp
 from numba import njit, uint64
 
-MAX_ACTIVE_SET_ITERATIONS = 40  # as catenary_env.dynamics.passage (imported from there would be circular)
-FULL_SWITCH_ITERATIONS = 8
+from .active_set import FULL_SWITCH_ITERATIONS, MAX_ACTIVE_SET_ITERATIONS
+
 WIDTH_STEP = 8  # band widths are padded to a multiple of this: fewer compiled versions
 TRUNCATION = 1e-30  # relative size of a unit response's entries left out (unit_responses)
 
@@ -434,7 +434,7 @@ def _settle(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, kapp
         new_contact = gap > 0.0
         if new_contact == contact and not changed:
             return contact, f, m, True
-        if iteration < FULL_SWITCH_ITERATIONS:  # as dynamics.switch_states
+        if iteration < FULL_SWITCH_ITERATIONS:  # as active_set.switch_states
             contact = new_contact
             for q in range(n_drop):
                 slack[q] = new_slack[q]
@@ -470,16 +470,14 @@ def _advance(u, v, acc, x, y, b, cf):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _known_part(d, k, h, zd, b, y, u, v, acc, y_p, yd_p, ydd_p, rhs_p, y_known, dl_known, rate_term):
-    """Pantograph without contact (y_known), the contact gap, dropper elongations and damping shares.
-
-    u_known = b + y. Returns the gap without contact force, m; fills y_known, dl_known = B u_known and
-    rate_term = β k B (a1 u₀ + a4 v₀ + a5 a₀).
-    """  # pragma: no cover - compiled
+def pantograph_known(d, y_p, yd_p, ydd_p, rhs_p, y_known):  # pragma: no cover - compiled
+    """The pantograph without the step's contact force: K̂_p y_known = M_p (a0 y + a2 ẏ + a3 ÿ)
+    + C_p (a1 y + a4 ẏ + a5 ÿ) + uplift. ``d`` holds load_p, pantograph_mass, pantograph_damping,
+    pantograph_inverse and the Newmark a0..a5 at coefficients[6:12] (both passages' arrays do)."""
     cf = d.coefficients
-    a0, a1, a2, a3, a4, a5, beta = cf[6], cf[7], cf[8], cf[9], cf[10], cf[11], cf[13]
+    a0, a1, a2, a3, a4, a5 = cf[6], cf[7], cf[8], cf[9], cf[10], cf[11]
     n_p = y_p.size
-    for i in range(n_p):  # K̂_p y_known = M_p (a0 y + a2 ẏ + a3 ÿ) + C_p (a1 y + a4 ẏ + a5 ÿ) + uplift
+    for i in range(n_p):
         t = d.load_p[i]
         for j in range(n_p):
             t += d.pantograph_mass[i, j] * (a0 * y_p[j] + a2 * yd_p[j] + a3 * ydd_p[j])
@@ -490,6 +488,19 @@ def _known_part(d, k, h, zd, b, y, u, v, acc, y_p, yd_p, ydd_p, rhs_p, y_known, 
         for j in range(n_p):
             t += d.pantograph_inverse[i, j] * rhs_p[j]
         y_known[i] = t
+
+
+@njit(cache=True)
+def _known_part(d, k, h, zd, b, y, u, v, acc, y_p, yd_p, ydd_p, rhs_p, y_known, dl_known, rate_term):
+    """Pantograph without contact (y_known), the contact gap, dropper elongations and damping shares.
+
+    u_known = b + y. Returns the gap without contact force, m; fills y_known, dl_known = B u_known and
+    rate_term = β k B (a1 u₀ + a4 v₀ + a5 a₀).
+    """  # pragma: no cover - compiled
+    cf = d.coefficients
+    a1, a4, a5, beta = cf[7], cf[10], cf[11], cf[13]
+    n_p = y_p.size
+    pantograph_known(d, y_p, yd_p, ydd_p, rhs_p, y_known)
     for q in range(dl_known.size):
         t_known = 0.0
         t_rate = 0.0

@@ -16,10 +16,10 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..model.definition import PantographDefinition
+from .active_set import MAX_ACTIVE_SET_ITERATIONS, switch_states
 from .linear_system import LinearSystem
 from .newmark import NewmarkConstants, Trajectory, passage_positions
 from .pantograph import pantograph_matrices, static_contact
-from .passage import MAX_ACTIVE_SET_ITERATIONS, switch_states
 
 
 def simulate_passage_reference(

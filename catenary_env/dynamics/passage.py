@@ -38,39 +38,10 @@ import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ..model.definition import PantographDefinition
+from .active_set import settle
 from .linear_system import LinearSystem
 from .newmark import NewmarkConstants, Trajectory, passage_positions
 from .pantograph import PantographMatrices, pantograph_matrices, static_contact
-
-MAX_ACTIVE_SET_ITERATIONS = 40
-FULL_SWITCH_ITERATIONS = 8
-
-
-def switch_states(
-    contact: bool,
-    slack: np.ndarray,
-    new_contact: bool,
-    new_slack: np.ndarray,
-    contact_force: float,
-    elastic: np.ndarray,
-    iteration: int,
-) -> tuple[bool, np.ndarray]:
-    """Next contact / slack-dropper state of the active-set iteration.
-
-    The first iterations switch every inconsistent state at once (Newton's method on the
-    piecewise-linear problem, quadratic when it works); should that cycle, later iterations switch
-    only the most violated one, which cannot cycle on this problem's P-matrix.
-    """
-    if iteration < FULL_SWITCH_ITERATIONS:
-        return new_contact, new_slack
-    violation = np.where(new_slack != slack, np.abs(elastic), 0.0)
-    contact_violation = abs(contact_force) if new_contact != contact else 0.0
-    if contact_violation >= violation.max(initial=0.0):
-        return new_contact, slack
-    slack = slack.copy()
-    worst = int(np.argmax(violation))
-    slack[worst] = not slack[worst]
-    return contact, slack
 
 
 class BandedCholesky:
@@ -324,33 +295,10 @@ def _simulate_numpy(
         dl_known = B @ u_known
         rate_term = beta * rate * (B @ (nm.a1 * u + nm.a4 * v + nm.a5 * a))
 
-        for iteration in range(MAX_ACTIVE_SET_ITERATIONS):
-            idx = np.flatnonzero(slack)
-            m = idx.size
-            A = np.eye(1 + m)
-            r = np.zeros(1 + m)
-            if contact:
-                A[0, 0] = 1.0 + kh * c_cc
-                A[0, 1:] = kh * g_dc[idx]
-                r[0] = kh * gap_known
-            if m:
-                A[1:, 0] = -kappa[idx] * g_dc[idx]
-                A[1:, 1:] -= kappa[idx, None] * G[np.ix_(idx, idx)]
-                r[1:] = N0[idx] + kappa[idx] * dl_known[idx] - rate_term[idx]
-            sol = np.linalg.solve(A, r) if m else r / A[0, 0]
-            f, lam = sol[0], sol[1:]
-            dl = dl_known + g_dc * f + G[:, idx] @ lam
-            elastic = N0 + kappa * dl - rate_term  # spring plus damping share
-            gap = gap_known - c_cc * f - g_dc[idx] @ lam
-            new_contact = bool(gap > 0.0)
-            new_slack = elastic < 0.0
-            if new_contact == contact and np.array_equal(new_slack, slack):
-                break
-            contact, slack = switch_states(
-                contact, slack, new_contact, new_slack, kh * gap, elastic, iteration
-            )
-        else:
-            unresolved += 1
+        step = settle(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, kappa, N0, G)
+        contact, slack, f, idx, lam, elastic = step[:6]
+        m = idx.size
+        unresolved += 0 if step.resolved else 1
 
         u_new = u_known + u_c * f + W[:, idx] @ lam
         y_new = y_known - f * y_star

@@ -28,6 +28,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -348,10 +349,6 @@ def resolve_fidelity(fidelity: str | Fidelity, n_spans: int | None = None) -> Fi
         return resolved
     if isinstance(n_spans, bool) or not isinstance(n_spans, int | np.integer) or n_spans < 3:
         raise ValueError(f"n_spans = {n_spans!r}: must be an integer >= 3")
-    return Fidelity(
-        n_spans=int(n_spans),
-        analysis_spans=min(resolved.analysis_spans, int(n_spans) - 2),
-        contact_wire_element=resolved.contact_wire_element,
-        messenger_wire_element=resolved.messenger_wire_element,
-        time_step=resolved.time_step,
+    return dataclasses.replace(
+        resolved, n_spans=int(n_spans), analysis_spans=min(resolved.analysis_spans, int(n_spans) - 2)
     )

@@ -1,0 +1,311 @@
+"""The accuracy contract of the span-mode ("study") model against the exact ("reference") one.
+
+docs/performance.md, 'Model fidelities'. Cases:
+
+- the reference design of each of the 8 problems at 250, 300 and 350 km/h;
+- 20 seeded random statically feasible designs of B1, B2, B3, SW1, SW2 and SW3 at 300 km/h;
+- the EN 50318:2002 model at 250 and 300 km/h (its own section and uplift force).
+
+Both models run each case with the same uplift force (the problem's, calibrated on the study model).
+The contract holds when, in every case, σ is within 1 % of the reference, the mean within 0.5 %, the
+actual maximum and minimum within 2 % of the mean, the feasibility verdict the same; Spearman's rank
+correlation of σ over each problem's random designs at least 0.99; and for the EN 50318 model σ 1 %,
+mean 0.5 %, extremes 2 % of the mean, the largest support uplift 2 %.
+
+The reference results are data (``benchmarks/results/fidelity_reference.json``) with the model
+fingerprint they were computed under; they are recomputed only when it changes or with
+``--recompute``.
+
+    python benchmarks/fidelity_contract.py            # table; exit status 1 when the contract fails
+    python benchmarks/fidelity_contract.py --json     # one JSON object with the figures and "passed"
+    python benchmarks/fidelity_contract.py --workers 2
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import dataclasses  # noqa: E402
+import json  # noqa: E402
+import sys  # noqa: E402
+from concurrent.futures import ProcessPoolExecutor  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+from scipy.stats import spearmanr  # noqa: E402
+
+from catenary_env.model.design import level_design  # noqa: E402
+from catenary_env.model.presets import load_catenary, load_pantograph  # noqa: E402
+from catenary_env.pipeline import FIDELITIES, Fidelity, evaluate, model_fingerprint, solve_static  # noqa: E402
+from catenary_env.problems import PROBLEMS  # noqa: E402
+
+REFERENCE_FILE = Path(__file__).parent / "results" / "fidelity_reference.json"
+SPEEDS_KMH = (250.0, 300.0, 350.0)
+RANDOM_PROBLEMS = ("B1", "B2", "B3", "SW1", "SW2", "SW3")
+RANDOM_DESIGNS = 20
+SEED = 2026
+TOLERANCE = {"std": 0.01, "mean": 0.005, "extremes": 0.02, "uplift": 0.02, "spearman": 0.99}
+
+
+@dataclasses.dataclass(frozen=True)
+class Case:
+    """One contract case: a problem's design (``x``, m) at a speed, or the EN 50318 model."""
+
+    name: str
+    problem: str  # "" for the EN 50318 model
+    x: tuple[float, ...]
+    speed_kmh: float
+    uplift_force: float
+    random: bool
+
+
+def _random_designs(problem_name: str, count: int, seed: int) -> list[tuple[float, ...]]:
+    """``count`` grid designs drawn uniformly, keeping those that are statically feasible."""
+    problem = PROBLEMS[problem_name]
+    rng = np.random.default_rng([seed, list(PROBLEMS).index(problem_name)])
+    fidelity = FIDELITIES["study"]
+    out: list[tuple[float, ...]] = []
+    while len(out) < count:
+        x = problem.from_grid_index(rng.integers(0, problem.n_levels))
+        try:
+            design = problem.design(x)
+            if solve_static(problem.catenary_definition, design, fidelity).infeasibility():
+                continue
+        except Exception:  # noqa: BLE001 - a design the catenary cannot build, or no equilibrium
+            continue
+        out.append(tuple(float(v) for v in x))
+    return out
+
+
+def contract_cases() -> list[Case]:
+    """The cases; each one's uplift force is the stored reference run's, so that both models see the same."""
+    stored = _stored()
+
+    def uplift(case: str, problem: str, speed: float) -> float:
+        if case in stored:
+            return float(stored[case]["uplift_force"])
+        return PROBLEMS[problem].uplift_force(speed, "study")
+
+    cases = []
+    for name, problem in PROBLEMS.items():
+        for speed in SPEEDS_KMH:
+            x = problem.reference_x()
+            force = uplift(f"{name} reference {speed:.0f}", name, speed)
+            x = () if x is None else tuple(float(v) for v in x)
+            cases.append(Case(f"{name} reference {speed:.0f}", name, x, speed, force, False))
+    for name in RANDOM_PROBLEMS:
+        force = uplift(f"{name} random 00", name, 300.0)
+        for i, x in enumerate(_random_designs(name, RANDOM_DESIGNS, SEED)):
+            cases.append(Case(f"{name} random {i:02d}", name, x, 300.0, force, True))
+    en = load_pantograph("en50318-2002")
+    for speed in (250.0, 300.0):
+        cases.append(Case(f"EN50318 {speed:.0f}", "", (), speed, float(en.uplift_force), False))
+    return cases
+
+
+def _en_fidelity(dynamics: str) -> Fidelity:
+    catenary = load_catenary("en50318-2002")
+    return Fidelity(n_spans=catenary.n_spans, analysis_spans=catenary.analysis_spans, dynamics=dynamics)
+
+
+def run_case(case: Case, dynamics: str) -> dict:
+    """Statistics of one case on one model (``"exact"`` or ``"span-modes"``)."""
+    if case.problem and case.x:
+        fidelity = dataclasses.replace(FIDELITIES["study"], dynamics=dynamics)
+        ev = PROBLEMS[case.problem].evaluate(case.x, case.speed_kmh, fidelity, uplift_force=case.uplift_force)
+    elif case.problem:  # B3 and SW3 are compared with the level wire on the preset's droppers
+        problem = PROBLEMS[case.problem]
+        fidelity = dataclasses.replace(FIDELITIES["study"], dynamics=dynamics)
+        ev = evaluate(
+            problem.catenary_definition,
+            problem.pantograph_definition,
+            problem.reference_design(),
+            case.speed_kmh / 3.6,
+            fidelity,
+            uplift_force=case.uplift_force,
+        )
+    else:
+        catenary = load_catenary("en50318-2002")
+        ev = evaluate(
+            catenary,
+            load_pantograph("en50318-2002"),
+            level_design(catenary),
+            case.speed_kmh / 3.6,
+            _en_fidelity(dynamics),
+            uplift_force=case.uplift_force,
+        )
+    stats = ev.statistics.as_dict() if ev.statistics is not None else None
+    return {"feasible": ev.feasible, "reason": ev.reason, "statistics": stats, "wall_time": ev.wall_time}
+
+
+def _exact_part(fidelity: Fidelity) -> dict:
+    """The fields of a fidelity that the exact model reads (not the span-mode cut-offs)."""
+    fields = dataclasses.asdict(fidelity)
+    for name in ("near_cutoff", "far_cutoff", "near_spans"):
+        fields.pop(name)
+    return fields
+
+
+def fingerprint() -> str:
+    """The reference results' validity: the problems' models, the reference fidelity, the cases."""
+    problems = [PROBLEMS[name].fingerprint() for name in PROBLEMS]
+    en = (load_catenary("en50318-2002"), load_pantograph("en50318-2002"), _exact_part(_en_fidelity("exact")))
+    reference = _exact_part(FIDELITIES["reference"])
+    return model_fingerprint(problems, *en, reference, SEED, RANDOM_DESIGNS, SPEEDS_KMH)
+
+
+def _stored() -> dict:
+    if REFERENCE_FILE.exists():
+        data = json.loads(REFERENCE_FILE.read_text())
+        if data.get("fingerprint") == fingerprint():
+            return data["cases"]
+    return {}
+
+
+def reference_results(cases: list[Case], workers: int, recompute: bool) -> dict[str, dict]:
+    """The exact model's results of every case: from the data file when its fingerprint matches."""
+    key = fingerprint()
+    stored = {} if recompute else _stored()
+    missing = [c for c in cases if c.name not in stored]
+    if missing:
+        print(f"computing the reference model for {len(missing)} cases ...", file=sys.stderr)
+        for case, result in zip(missing, _map(run_case, missing, "exact", workers), strict=True):
+            stored[case.name] = result | {"x": list(case.x), "uplift_force": case.uplift_force}
+            REFERENCE_FILE.parent.mkdir(parents=True, exist_ok=True)
+            REFERENCE_FILE.write_text(json.dumps({"fingerprint": key, "cases": stored}, indent=1))
+    return stored
+
+
+def _map(function, cases: list[Case], dynamics: str, workers: int):  # noqa: ANN001, ANN202
+    """``function(case, dynamics)`` for each case, yielded in order as they complete."""
+    if workers <= 1:
+        yield from (function(c, dynamics) for c in cases)
+        return
+    with ProcessPoolExecutor(workers) as pool:
+        yield from pool.map(function, cases, [dynamics] * len(cases))
+
+
+def _errors(ref: dict, red: dict) -> dict[str, float]:
+    r, s = ref["statistics"], red["statistics"]
+    if r is None or s is None:
+        return {}
+    mean = r["mean"]
+    return {
+        "std": s["std"] / r["std"] - 1.0,
+        "mean": s["mean"] / mean - 1.0,
+        "max": (s["actual_max"] - r["actual_max"]) / mean,
+        "min": (s["actual_min"] - r["actual_min"]) / mean,
+        "uplift": s["max_support_uplift"] / r["max_support_uplift"] - 1.0,
+    }
+
+
+def evaluate_contract(cases: list[Case], reference: dict, reduced: dict) -> dict:
+    rows = []
+    for case in cases:
+        ref, red = reference[case.name], reduced[case.name]
+        err = _errors(ref, red)
+        rows.append(
+            {
+                "case": case.name,
+                "std_reference": ref["statistics"]["std"] if ref["statistics"] else None,
+                "std_study": red["statistics"]["std"] if red["statistics"] else None,
+                "feasible_reference": ref["feasible"],
+                "feasible_study": red["feasible"],
+                "time_reference": ref["wall_time"],
+                "time_study": red["wall_time"],
+                **{f"error_{k}": v for k, v in err.items()},
+            }
+        )
+    compared = [r for r in rows if "error_std" in r]
+    std_err = np.abs([r["error_std"] for r in compared])
+    mean_err = np.abs([r["error_mean"] for r in compared])
+    ext_err = np.abs([max(abs(r["error_max"]), abs(r["error_min"])) for r in compared])
+    verdicts_agree = all(r["feasible_reference"] == r["feasible_study"] for r in rows)
+    spearman = {}
+    for name in RANDOM_PROBLEMS:
+        picked = [r for r in compared if r["case"].startswith(f"{name} random")]
+        if len(picked) >= 3:
+            rho = spearmanr([r["std_reference"] for r in picked], [r["std_study"] for r in picked]).statistic
+            spearman[name] = float(rho)
+    en = [r for r in compared if r["case"].startswith("EN50318")]
+    en_uplift = max((abs(r["error_uplift"]) for r in en), default=0.0)
+    checks = {
+        "std": float(std_err.max()) <= TOLERANCE["std"],
+        "mean": float(mean_err.max()) <= TOLERANCE["mean"],
+        "extremes": float(ext_err.max()) <= TOLERANCE["extremes"],
+        "verdicts": verdicts_agree,
+        "spearman": all(v >= TOLERANCE["spearman"] for v in spearman.values()),
+        "en50318_uplift": en_uplift <= TOLERANCE["uplift"],
+    }
+    ratio = [r["time_study"] / r["time_reference"] for r in compared if r["time_reference"] > 0]
+    return {
+        "cases": len(rows),
+        "std_error_max": float(std_err.max()),
+        "std_error_median": float(np.median(std_err)),
+        "mean_error_max": float(mean_err.max()),
+        "extremes_error_max": float(ext_err.max()),
+        "en50318_support_uplift_error_max": float(en_uplift),
+        "verdicts_agree": verdicts_agree,
+        "spearman": spearman,
+        "time_ratio_median": float(np.median(ratio)) if ratio else None,
+        "checks": checks,
+        "passed": all(checks.values()),
+        "rows": rows,
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--workers", type=int, default=1, help="processes for the simulations")
+    parser.add_argument("--recompute", action="store_true", help="recompute the reference results")
+    parser.add_argument("--reference-only", action="store_true", help="only compute the reference results")
+    args = parser.parse_args(argv)
+    cases = contract_cases()
+    reference = reference_results(cases, args.workers, args.recompute)
+    if args.reference_only:
+        return 0
+    reduced = dict(
+        zip((c.name for c in cases), _map(run_case, cases, "span-modes", args.workers), strict=True)
+    )
+    report = evaluate_contract(cases, reference, reduced)
+    if args.json:
+        print(json.dumps(report, indent=1))
+    else:
+        for row in report["rows"]:
+            if "error_std" in row:
+                print(
+                    f"{row['case']:<22} σ {row['std_reference']:8.3f} {row['std_study']:8.3f} N "
+                    f"({100 * row['error_std']:+.3f} %)  mean {100 * row['error_mean']:+.3f} %  "
+                    f"max {100 * row['error_max']:+.2f} %  min {100 * row['error_min']:+.2f} % of the mean"
+                )
+            else:
+                print(
+                    f"{row['case']:<22} infeasible: reference {row['feasible_reference']}, "
+                    f"study {row['feasible_study']}"
+                )
+        print()
+        for key in (
+            "cases",
+            "std_error_max",
+            "std_error_median",
+            "mean_error_max",
+            "extremes_error_max",
+            "en50318_support_uplift_error_max",
+            "verdicts_agree",
+            "spearman",
+            "time_ratio_median",
+            "checks",
+            "passed",
+        ):
+            print(f"{key}: {report[key]}")
+    return 0 if report["passed"] else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

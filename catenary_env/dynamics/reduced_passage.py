@@ -1,0 +1,715 @@
+"""The pantograph passage on the span-mode model (docs/performance.md, 'Model fidelities').
+
+The same Newmark scheme, superposition and active-set rules as the exact passage, in the
+coordinates of :mod:`span_modes`. The effective matrix K̂ = c_k K + c_m M of the reduced system is
+diagonal in each span's modes, D = c_k ω² + c_m, and couples them only through the interface DOFs,
+so a solve eliminates the modes span by span and leaves a small banded system on the interface,
+its Schur complement S:
+
+    x_b = S⁻¹ (r_b - c_m Σ_s M_cq D⁻¹ r_q),     x_q = D⁻¹ (r_q - c_m M_qc x_c).
+
+A step costs dense products with the spans' mode-interface couplings instead of two sweeps over
+the whole section's banded factor.
+
+Near field and far field. High-frequency motion is excited by the contact and the droppers near the
+pantograph and dies out within metres (Rayleigh damping βω/2 grows with frequency), so the spans
+within ``near_spans`` of the pantograph keep their modes up to the near cut-off and the others only
+those below the far cut-off. The model therefore changes, by a span's high modes, when the pantograph
+crosses a support: a *configuration* per span the pantograph is in, each a proper Galerkin reduction
+with its own Schur complement. A span leaving the near field drops its high modes' state.
+
+Residual flexibility. Within one step a force at the contact point or at a dropper also moves the
+truncated modes. Their share of the one-step compliance, R = K̂_ii⁻¹ - Φ D⁻¹ Φᵀ per span, is added
+where the forces act, so that the contact and the slack droppers see the exact one-step compliance;
+the truncated modes carry no state.
+
+Both loops, numpy (:func:`_run_numpy`) and compiled (:mod:`_reduced_kernels`), read the same
+:class:`ReducedArrays` and follow the same steps (see :mod:`_reduced_kernels`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+
+from ..model.definition import PantographDefinition
+from .active_set import settle
+from .newmark import NewmarkConstants, Trajectory
+from .passage import _Passage, _start_passage, _trajectory
+from .span_modes import ReducedSystem, band_storage, upper_band
+
+
+def band_rows(ab: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """An upper band factor (LAPACK storage, (w + 1, n)) as its columns above the diagonal (n, w),
+    its rows right of the diagonal (n, w) and its reciprocal diagonal (n,): the compiled loop reads
+    each contiguously."""
+    w = ab.shape[0] - 1
+    n = ab.shape[1]
+    columns = np.zeros((n, w))
+    rows = np.zeros((n, w))
+    for j in range(n):
+        for i in range(max(0, j - w), j):
+            columns[j, w - j + i] = ab[w + i - j, j]
+            rows[i, j - i - 1] = ab[w + i - j, j]
+    return columns, rows, 1.0 / ab[w]
+
+
+def _band_factor_solve(
+    columns: np.ndarray, rows: np.ndarray, inverse: np.ndarray, b: np.ndarray
+) -> np.ndarray:
+    """(Uᵀ U)⁻¹ b from :func:`band_rows`' form (b may have several columns)."""
+    w = columns.shape[1]
+    n = inverse.size
+    ab = np.zeros((w + 1, n))
+    ab[w] = 1.0 / inverse
+    for j in range(n):
+        for i in range(max(0, j - w), j):
+            ab[w + i - j, j] = columns[j, w - j + i]
+    return sla.cho_solve_banded((ab, False), b, check_finite=False)
+
+
+def _band(matrix: np.ndarray) -> int:
+    rows, cols = np.nonzero(matrix)
+    return int(np.max(np.abs(rows - cols), initial=0))
+
+
+@dataclass(frozen=True)
+class PreparedReducedPassage:
+    """The design's part of the reduced passage, computed once per design and time step.
+
+    Attributes
+    ----------
+    reduced : ReducedSystem
+    constants : NewmarkConstants
+    near_spans : int
+    arrays : dict of str to ndarray
+        The loop's arrays (:class:`catenary_env._reduced_kernels.ReducedArrays` fields without the
+        per-passage ones).
+    """
+
+    reduced: ReducedSystem
+    constants: NewmarkConstants
+    near_spans: int
+    arrays: dict
+
+
+def prepare_reduced_passage(
+    reduced: ReducedSystem, time_step: float, near_spans: int = 1
+) -> PreparedReducedPassage:
+    """The Schur complements, dropper responses and residual compliances of every configuration."""
+    system = reduced.system
+    nm = NewmarkConstants.for_step(time_step)
+    c_k = 1.0 + system.beta * nm.a1
+    c_m = nm.a0 + system.alpha * nm.a1
+    modes = _mode_arrays(reduced, c_k, c_m)
+    kept = _kept_modes(reduced, near_spans)
+    droppers = _dropper_arrays(reduced, modes["inverse_diagonal"])
+    residual = _Residuals(reduced, c_k, c_m, droppers["dropper_span"])
+    configurations = _configurations(reduced, c_k, c_m, kept, modes, droppers, residual)
+    elements = _element_arrays(reduced, droppers["dropper_span"], residual)
+    arrays = modes | droppers | configurations | elements
+    arrays.update(
+        kept=kept,
+        dropper_rate=system.dropper_rate.astype(float),
+        dropper_force=system.dropper_force.astype(float),
+        dropper_kappa=system.dropper_rate * c_k,
+        support=residual.interface_position[system.support_z],
+        coefficients=_coefficients(reduced, nm, c_k, c_m),
+    )
+    return PreparedReducedPassage(reduced, nm, near_spans, arrays)
+
+
+def _mode_arrays(reduced: ReducedSystem, c_k: float, c_m: float) -> dict[str, np.ndarray]:
+    """Each span type's modes, padded to the largest type: M_cq, 1 / D, 1 - c_m / D, Φ, Ψ."""
+    types = reduced.types
+    n_types = len(types)
+    m_max = max(t.n_modes for t in types)
+    nc_max = max(c.size for c in reduced.coupled)
+    ni_max = max(t.shapes.shape[0] for t in types)
+    coupled = np.zeros((reduced.span_type.size, nc_max), dtype=np.int64)
+    for s, c in enumerate(reduced.coupled):
+        coupled[s, : c.size] = c
+    coupling = np.zeros((n_types, nc_max, m_max))
+    inv_d = np.zeros((n_types, m_max))
+    weight = np.zeros((n_types, m_max))
+    shapes = np.zeros((n_types, ni_max, m_max))
+    constraint = np.zeros((n_types, ni_max, nc_max))
+    for t, modes in enumerate(types):
+        m, nc = modes.mass_coupling.shape
+        diagonal = c_k * modes.omega2 + c_m
+        coupling[t, :nc, :m] = modes.mass_coupling.T
+        inv_d[t, :m] = 1.0 / diagonal
+        weight[t, :m] = 1.0 - c_m / diagonal
+        shapes[t, : modes.shapes.shape[0], :m] = modes.shapes
+        constraint[t, : modes.shapes.shape[0], :nc] = modes.constraint
+    return dict(
+        span_type=reduced.span_type.astype(np.int64),
+        modal_offset=reduced.modal_offset.astype(np.int64),
+        coupled=coupled,
+        n_coupled=np.array([t.mass_coupling.shape[1] for t in types], dtype=np.int64),
+        n_modes=np.array([t.n_modes for t in types], dtype=np.int64),
+        coupling=coupling,
+        inverse_diagonal=inv_d,
+        weight=weight,
+        shapes=shapes,
+        constraint=constraint,
+    )
+
+
+def _kept_modes(reduced: ReducedSystem, near_spans: int) -> np.ndarray:
+    """(C, S): the modes span s keeps while the pantograph is in span c."""
+    n_spans = reduced.span_type.size
+    far = np.array([t.far_modes for t in reduced.types])[reduced.span_type]
+    full = np.array([t.n_modes for t in reduced.types])[reduced.span_type]
+    near = np.abs(np.arange(n_spans)[:, None] - np.arange(n_spans)[None, :]) <= near_spans
+    return np.where(near, full[None, :], far[None, :]).astype(np.int64)
+
+
+def _dropper_arrays(reduced: ReducedSystem, inv_d: np.ndarray) -> dict[str, np.ndarray]:
+    """Each dropper's row of B T, split into its span's modes (B_q) and coupled interface (B_c)."""
+    system = reduced.system
+    B = system.dropper_elongation.tocsr()
+    d_span = system.static.layout.dropper_span.astype(np.int64)
+    d_q = np.zeros((d_span.size, inv_d.shape[1]))
+    d_c = np.zeros((d_span.size, max(c.size for c in reduced.coupled)))
+    for s, dofs in enumerate(reduced.internal):
+        q = np.flatnonzero(d_span == s)
+        modes = reduced.modes_of(s)
+        B_s = B[q]
+        B_int = B_s[:, dofs].toarray()
+        c = reduced.coupled[s]
+        d_q[q, : modes.n_modes] = B_int @ modes.shapes
+        d_c[q, : c.size] = B_int @ modes.constraint + B_s[:, reduced.interface[c]].toarray()
+        if not np.isin(B_s.indices[B_s.data != 0.0], np.r_[dofs, reduced.interface[c]]).all():
+            raise AssertionError("a dropper's row reaches outside its span")  # a bug, never a user error
+    return dict(
+        dropper_span=d_span,
+        dropper_q=d_q * inv_d[reduced.span_type[d_span]],
+        dropper_q_plain=d_q,
+        dropper_c=d_c,
+    )
+
+
+class _Residuals:
+    """The truncated modes' one-step compliance R = K̂_ii⁻¹ - Φ D⁻¹ Φᵀ of each span type, with the near
+    and with the far modes, on the internal DOFs where forces act ("selected": the contact wire's z
+    DOFs and the droppers' ends), and each span's droppers as rows over those DOFs."""
+
+    def __init__(self, reduced: ReducedSystem, c_k: float, c_m: float, d_span: np.ndarray) -> None:
+        system = reduced.system
+        B = system.dropper_elongation.tocsr()
+        n_spans = reduced.span_type.size
+        self.local_of = np.full(system.n_dofs, -1, dtype=np.int64)
+        self.span_of = np.full(system.n_dofs, -1, dtype=np.int64)
+        for s, dofs in enumerate(reduced.internal):
+            self.local_of[dofs] = np.arange(dofs.size)
+            self.span_of[dofs] = s
+        self.interface_position = np.full(system.n_dofs, -1, dtype=np.int64)
+        self.interface_position[reduced.interface] = np.arange(reduced.interface.size)
+        z_dofs = system.contact_wire.z_dofs.ravel()
+        self.selected, self.near, self.far = [], [], []
+        for t, modes in enumerate(reduced.types):
+            spans_t = np.flatnonzero(reduced.span_type == t)
+            dofs = np.r_[z_dofs, B[np.isin(d_span, spans_t)].indices]
+            sel = np.unique(self.local_of[dofs[np.isin(self.span_of[dofs], spans_t)]])
+            unit = np.zeros((modes.shapes.shape[0], sel.size))
+            unit[sel, np.arange(sel.size)] = 1.0
+            effective = upper_band(c_k * modes.stiffness_internal + c_m * modes.mass_internal)
+            inverse = sla.cho_solve_banded((effective, False), unit, check_finite=False)[sel]
+            phi = modes.shapes[sel] / np.sqrt(c_k * modes.omega2 + c_m)
+            k = modes.far_modes
+            self.selected.append(sel)
+            self.near.append(inverse - phi @ phi.T)
+            self.far.append(inverse - phi[:, :k] @ phi[:, :k].T)
+        self.span_droppers = []
+        for s in range(n_spans):
+            sel = self.selected[reduced.span_type[s]]
+            position = np.full(reduced.internal[s].size, -1)
+            position[sel] = np.arange(sel.size)
+            B_s = B[np.flatnonzero(d_span == s)][:, reduced.internal[s]].tocoo()
+            rows = np.zeros((B_s.shape[0], sel.size))
+            np.add.at(rows, (B_s.row, position[B_s.col]), B_s.data)
+            self.span_droppers.append(rows)
+
+    def dropper_block(self, reduced: ReducedSystem, span: int, near: bool) -> np.ndarray:
+        """The span's droppers' residual flexibility B R Bᵀ, m/N."""
+        t = reduced.span_type[span]
+        rows = self.span_droppers[span]
+        return rows @ (self.near[t] if near else self.far[t]) @ rows.T
+
+
+def _configurations(
+    reduced: ReducedSystem,
+    c_k: float,
+    c_m: float,
+    kept: np.ndarray,
+    modes: dict[str, np.ndarray],
+    droppers: dict[str, np.ndarray],
+    residual: _Residuals,
+) -> dict[str, np.ndarray]:
+    """Per configuration: S's banded factor, Y, H = B_q D⁻¹ M_qc, the droppers' interface responses
+    and their flexibility G (of the kept modes, and with the residual)."""
+    types = reduced.types
+    n_spans = reduced.span_type.size
+    n_b = reduced.interface.size
+    d_span, d_q, d_qd, d_c = (
+        droppers[k] for k in ("dropper_span", "dropper_q_plain", "dropper_q", "dropper_c")
+    )
+    n_drop, nc_max = d_c.shape
+    inv_d, coupling = modes["inverse_diagonal"], modes["coupling"]
+    width = max(
+        max((int(np.ptp(c)) for c in reduced.coupled if c.size), default=0),
+        _band(reduced.interface_mass),
+        _band(reduced.interface_stiffness),
+    )
+    out = dict(
+        schur_columns=np.zeros((n_spans, n_b, width)),
+        schur_rows=np.zeros((n_spans, n_b, width)),
+        schur_inverse_diagonal=np.zeros((n_spans, n_b)),
+        interface_rhs_band=np.zeros((n_spans, 2 * width + 1, n_b)),
+        dropper_h=np.zeros((n_spans, n_drop, nc_max)),
+        dropper_interface=np.zeros((n_spans, n_drop, n_b)),
+        dropper_flexibility=np.zeros((n_spans, n_drop, n_drop)),
+        dropper_modal_flexibility=np.zeros((n_spans, n_drop, n_drop)),
+    )
+    # A span's share of Σ M_cq D⁻¹ M_qc, of the droppers' G and of the residual, per mode count kept.
+    span_sum, modal_block, residual_block = {}, {}, {}
+    for s in range(n_spans):
+        t = reduced.span_type[s]
+        q = np.flatnonzero(d_span == s)
+        for k in {types[t].far_modes, types[t].n_modes}:
+            mqc = types[t].mass_coupling[:k] * np.sqrt(inv_d[t, :k, None])
+            span_sum[s, k] = mqc.T @ mqc
+            modal_block[s, k] = (d_q[q, :k] * inv_d[t, :k]) @ d_q[q, :k].T
+            residual_block[s, k] = residual.dropper_block(reduced, s, near=k == types[t].n_modes)
+    d_cols = modes["coupled"][d_span]
+    d_valid = np.arange(nc_max)[None, :] < modes["n_coupled"][reduced.span_type[d_span]][:, None]
+    d_rows = np.repeat(np.arange(n_drop), nc_max)[d_valid.ravel()]
+    for p in range(n_spans):
+        sum_coupling = np.zeros((n_b, n_b))
+        for s, c in enumerate(reduced.coupled):
+            sum_coupling[np.ix_(c, c)] += span_sum[s, kept[p, s]]
+        schur = c_k * reduced.interface_stiffness + c_m * reduced.interface_mass - c_m**2 * sum_coupling
+        factor = sla.cholesky_banded(band_storage(0.5 * (schur + schur.T), width), check_finite=False)
+        out["schur_columns"][p], out["schur_rows"][p], out["schur_inverse_diagonal"][p] = band_rows(factor)
+        Y = reduced.interface_mass - c_m * sum_coupling
+        for k in range(-width, width + 1):
+            out["interface_rhs_band"][p, width + k, max(0, -k) : n_b - max(0, k)] = np.diagonal(Y, k)
+        for s in range(n_spans):
+            q = np.flatnonzero(d_span == s)
+            k = kept[p, s]
+            out["dropper_h"][p, q] = d_qd[q, :k] @ coupling[reduced.span_type[s], :, :k].T
+        H = np.zeros((n_drop, n_b))  # B_c - c_m H on the interface: a unit dropper force's right-hand side
+        H[d_rows, d_cols[d_valid]] = (d_c - c_m * out["dropper_h"][p])[d_valid]
+        X = sla.cho_solve_banded((factor, False), H.T, check_finite=False)
+        out["dropper_interface"][p] = X.T
+        G = H @ X
+        G_full = G.copy()
+        for s in range(n_spans):
+            block = np.ix_(*(2 * (np.flatnonzero(d_span == s),)))
+            G[block] += modal_block[s, kept[p, s]]
+            G_full[block] += modal_block[s, kept[p, s]] + residual_block[s, kept[p, s]]
+        out["dropper_modal_flexibility"][p] = G
+        out["dropper_flexibility"][p] = G_full
+    return out
+
+
+def _element_arrays(
+    reduced: ReducedSystem, d_span: np.ndarray, residual: _Residuals
+) -> dict[str, np.ndarray]:
+    """Each contact-wire element's span, its DOFs' local indices (or interface positions), and its
+    residual compliance and coupling to its span's droppers (near modes: the pantograph's span is
+    always in the near field)."""
+    system = reduced.system
+    lay = system.static.layout
+    n_spans = reduced.span_type.size
+    z_dofs = system.contact_wire.z_dofs
+    n_el = z_dofs.shape[0]
+    position = residual.interface_position
+    in_coupled = np.full((n_spans, reduced.interface.size), -1, dtype=np.int64)
+    for s, c in enumerate(reduced.coupled):
+        in_coupled[s, c] = np.arange(c.size)
+    x_start = system.contact_wire.x_start
+    x_mid = np.r_[0.5 * (x_start[:-1] + x_start[1:]), x_start[-1] + 1e-3]
+    el_span = np.minimum((x_mid // lay.span_length).astype(np.int64), n_spans - 1)
+    inside = residual.span_of[z_dofs] >= 0
+    if np.any(inside & (residual.span_of[z_dofs] != el_span[:, None])) or np.any(
+        ~inside & (position[z_dofs] < 0)
+    ):
+        raise AssertionError("a contact-wire element reaches outside its span")  # a bug, never a user error
+    el_local = np.where(
+        inside, residual.local_of[z_dofs], -1 - in_coupled[el_span[:, None], np.maximum(position[z_dofs], 0)]
+    )
+    per_span = int(np.bincount(d_span, minlength=n_spans).max())
+    el_droppers = np.full((n_el, per_span), -1, dtype=np.int64)
+    el_comp = np.zeros((n_el, 4, 4))
+    el_res = np.zeros((n_el, 4, per_span))
+    for s in range(n_spans):
+        els = np.flatnonzero(el_span == s)
+        t = reduced.span_type[s]
+        where = np.full(reduced.types[t].shapes.shape[0], -1)
+        where[residual.selected[t]] = np.arange(residual.selected[t].size)
+        R = residual.near[t]
+        loc = np.where(el_local[els] >= 0, where[np.maximum(el_local[els], 0)], -1)
+        ok = loc >= 0
+        safe = np.maximum(loc, 0)
+        el_comp[els] = np.where(ok[:, :, None] & ok[:, None, :], R[safe[:, :, None], safe[:, None, :]], 0.0)
+        drops = np.flatnonzero(d_span == s)
+        el_droppers[els, : drops.size] = drops
+        el_res[els, :, : drops.size] = np.where(ok[:, :, None], (R @ residual.span_droppers[s].T)[safe], 0.0)
+    return dict(
+        element_span=el_span,
+        element_local=el_local,
+        element_compliance=el_comp,
+        element_droppers=el_droppers,
+        element_dropper_residual=el_res,
+    )
+
+
+def _coefficients(reduced: ReducedSystem, nm: NewmarkConstants, c_k: float, c_m: float) -> np.ndarray:
+    """e1..e3, g1..g3, a0..a5, k_h, β, c_m, 1 / c_k: the next u_known is K̂⁻¹ M e + y / c_k with
+    e = e1 u + e2 v + e3 a and y = g1 u + g2 v + g3 a. With Rayleigh damping K̂ = c_k K + c_m M, so
+    K̂⁻¹ (M x + K y) = K̂⁻¹ M (x - c_m y / c_k) + y / c_k: no product with K."""
+    system = reduced.system
+    x_coef = np.array(
+        [nm.a0 + system.alpha * nm.a1, nm.a2 + system.alpha * nm.a4, nm.a3 + system.alpha * nm.a5]
+    )
+    g_coef = system.beta * np.array([nm.a1, nm.a4, nm.a5])
+    contact = system.static.layout.catenary.contact_stiffness
+    newmark = [nm.a0, nm.a1, nm.a2, nm.a3, nm.a4, nm.a5]
+    return np.concatenate(
+        [x_coef - (c_m / c_k) * g_coef, g_coef, newmark, [contact, system.beta, c_m, 1 / c_k]]
+    )
+
+
+class _Arrays:
+    """Attribute access to the loop's arrays (the numpy loop reads what the compiled one reads)."""
+
+    def __init__(self, fields: dict) -> None:
+        self.__dict__.update(fields)
+
+
+def _passage_arrays(prepared: PreparedReducedPassage, passage: _Passage) -> dict:
+    lay = prepared.reduced.system.static.layout
+    n_spans = prepared.reduced.span_type.size
+    pm = passage.pantograph
+    return dict(
+        prepared.arrays,
+        config=np.minimum((passage.position // lay.span_length).astype(np.int64), n_spans - 1),
+        element=passage.element.astype(np.int64),
+        shape=np.ascontiguousarray(passage.shape, dtype=float),
+        wire_z=passage.wire_z.astype(float),
+        pantograph_inverse=passage.pantograph_inverse,
+        pantograph_mass=np.ascontiguousarray(pm.mass, dtype=float),
+        pantograph_damping=np.ascontiguousarray(pm.damping, dtype=float),
+        y_star=passage.y_star,
+        load_p=passage.load_p,
+    )
+
+
+def _initial_acceleration(reduced: ReducedSystem, kept: np.ndarray, load: np.ndarray) -> np.ndarray:
+    """a = M_r⁻¹ Tᵀ load over the kept modes, for the catenary at rest under the first contact force."""
+    n_q = reduced.n_modal
+    off = reduced.modal_offset
+    rhs = reduced.rows(np.flatnonzero(load)).T @ load[np.flatnonzero(load)]
+    schur = reduced.interface_mass.copy()
+    r_b = rhs[n_q:].copy()
+    for s, c in enumerate(reduced.coupled):
+        coupling = reduced.modes_of(s).mass_coupling[: kept[s]]
+        schur[np.ix_(c, c)] -= coupling.T @ coupling
+        r_b[c] -= coupling.T @ rhs[off[s] : off[s] + kept[s]]
+    x = np.zeros_like(rhs)
+    x_b = np.linalg.solve(schur, r_b)
+    x[n_q:] = x_b
+    for s, c in enumerate(reduced.coupled):
+        coupling = reduced.modes_of(s).mass_coupling[: kept[s]]
+        x[off[s] : off[s] + kept[s]] = rhs[off[s] : off[s] + kept[s]] - coupling @ x_b[c]
+    return x
+
+
+def simulate_reduced_passage(
+    prepared: PreparedReducedPassage,
+    pantograph: PantographDefinition,
+    uplift_force: float,
+    speed: float,
+    n_steps: int | None = None,
+    backend: str = "auto",
+    progress: Callable[[float], None] | None = None,
+) -> Trajectory:
+    """Pantograph passage over the whole section on the span-mode model (same rules as the exact one).
+
+    backend : {"auto", "numpy", "numba"}
+        ``"numba"`` compiles the loop (:mod:`catenary_env._reduced_kernels`); ``"numpy"`` is the
+        reference; ``"auto"`` takes numba when it is installed.
+    """
+    red = prepared.reduced
+    system = red.system
+    if backend == "auto":
+        try:
+            from . import _reduced_kernels  # noqa: F401
+        except ImportError:
+            backend = "numpy"
+        else:
+            backend = "numba"
+    passage = _start_passage(system, pantograph, uplift_force, speed, prepared.constants, n_steps)
+    fields = _passage_arrays(prepared, passage)
+    n = red.n_dofs
+    n_steps = passage.time.size
+    head = passage.pantograph.head
+    N0 = system.dropper_force
+    c0 = int(fields["config"][0])
+    load = np.zeros(system.n_dofs)
+    np.add.at(load, system.contact_wire.z_dofs[passage.element[0]], passage.shape[0] * passage.force0)
+    a = _initial_acceleration(red, fields["kept"][c0], load)
+    cf = fields["coefficients"]
+    state = dict(
+        u=np.zeros(n),
+        v=np.zeros(n),
+        a=a,
+        e=cf[2] * a,
+        y=cf[5] * a,
+        Bu=np.zeros(N0.size),
+        Bv=np.zeros(N0.size),
+        Ba=np.zeros(N0.size),
+        y_p=passage.y0.copy(),
+        yd_p=np.zeros(head + 1),
+        ydd_p=np.zeros(head + 1),
+        slack=np.zeros(N0.size, dtype=np.bool_),
+        flags=np.array([passage.force0 > 0.0, -1, 0, 0], dtype=np.int64),
+        force=np.zeros(n_steps),
+        head_height=np.zeros(n_steps),
+        wire_uplift=np.zeros(n_steps),
+        support_uplift=np.zeros((n_steps, system.support_z.size)),
+        dropper_min=N0.copy(),
+        dropper_max=N0.copy(),
+    )
+    state["force"][0] = passage.force0
+    state["head_height"][0] = passage.y0[head]
+    if backend == "numba":
+        from . import _reduced_kernels as kernels
+
+        data = kernels.ReducedArrays(**fields)
+        st = kernels.ReducedState(**state)
+        bounds = np.unique(np.linspace(1, n_steps, 101 if progress is not None else 2).round().astype(int))
+        for first, stop in zip(bounds[:-1], bounds[1:], strict=True):
+            kernels.run_reduced(data, st, int(first), int(stop))
+            if progress is not None:
+                progress(stop / n_steps)
+    elif backend == "numpy":
+        st = _Arrays(state)
+        _run_numpy(_Arrays(fields), st, progress)
+    else:
+        raise ValueError(f"backend = {backend!r}: one of auto, numpy, numba")
+    st = state
+    return _trajectory(
+        system,
+        passage,
+        st["force"],
+        st["head_height"],
+        st["wire_uplift"],
+        st["support_uplift"],
+        st["dropper_min"],
+        st["dropper_max"],
+        st["flags"][2],
+        st["flags"][3],
+    )
+
+
+def _schur_solve(d: _Arrays, c: int, b: np.ndarray) -> np.ndarray:
+    return _band_factor_solve(d.schur_columns[c], d.schur_rows[c], d.schur_inverse_diagonal[c], b)
+
+
+def _element_rows(d: _Arrays, e: int) -> tuple[np.ndarray, np.ndarray]:
+    t = d.span_type[d.element_span[e]]
+    rows_q = np.zeros((4, d.coupling.shape[2]))
+    rows_c = np.zeros((4, d.coupling.shape[1]))
+    for i in range(4):
+        local = d.element_local[e, i]
+        if local >= 0:
+            rows_q[i] = d.shapes[t, local]
+            rows_c[i] = d.constraint[t, local]
+        else:
+            rows_c[i, -1 - local] = 1.0
+    return rows_q, rows_c
+
+
+def _element_responses(d: _Arrays, c: int, e: int, rows_q: np.ndarray, rows_c: np.ndarray):
+    """As the compiled loop's: p_b (n_b, 4), compliance (4, 4), g_modal and g_full (D, 4)."""
+    c_m = d.coefficients[14]
+    s = d.element_span[e]
+    t = d.span_type[s]
+    m = d.kept[c, s]
+    nc = d.n_coupled[t]
+    idiag = d.inverse_diagonal[t, :m]
+    coupling = d.coupling[t, :nc, :m]  # M_cq
+    n_b = d.schur_inverse_diagonal.shape[1]
+    F_b = np.zeros((n_b, 4))
+    np.add.at(F_b, d.coupled[s, :nc], rows_c[:, :nc].T - c_m * coupling @ (idiag[:, None] * rows_q[:, :m].T))
+    p_b = _schur_solve(d, c, F_b)
+    p_c = p_b[d.coupled[s, :nc]]
+    rq = rows_q[:, :m] * idiag
+    comp = d.element_compliance[e] + rq @ rows_q[:, :m].T + (rows_c[:, :nc] - c_m * rq @ coupling.T) @ p_c
+    g = np.zeros((d.dropper_force.size, 4))
+    for q in range(d.dropper_force.size):
+        sd = d.dropper_span[q]
+        ncd = d.n_coupled[d.span_type[sd]]
+        g[q] = (d.dropper_c[q, :ncd] - c_m * d.dropper_h[c, q, :ncd]) @ p_b[d.coupled[sd, :ncd]]
+        if sd == s:
+            g[q] += rows_q[:, :m] @ d.dropper_q[q, :m]
+    g_full = g.copy()
+    drops = d.element_droppers[e]
+    ok = drops >= 0
+    g_full[drops[ok]] += d.element_dropper_residual[e][:, ok].T
+    return p_b, comp, g, g_full
+
+
+def _dropper_elongations(d: _Arrays, c: int, vec: np.ndarray) -> np.ndarray:
+    n_q = d.modal_offset[-1]
+    out = np.zeros(d.dropper_force.size)
+    for q in range(out.size):
+        s = d.dropper_span[q]
+        off = d.modal_offset[s]
+        k = d.kept[c, s]
+        nc = d.n_coupled[d.span_type[s]]
+        out[q] = (
+            d.dropper_q_plain[q, :k] @ vec[off : off + k] + d.dropper_c[q, :nc] @ vec[n_q + d.coupled[s, :nc]]
+        )
+    return out
+
+
+def _run_numpy(d: _Arrays, st: _Arrays, progress: Callable[[float], None] | None) -> None:  # noqa: C901
+    """The reference time loop: the compiled loop's steps in numpy."""
+    cf = d.coefficients
+    e1, e2, e3, g1, g2, g3 = cf[:6]
+    a0, a1, a2, a3, a4, a5 = cf[6:12]
+    kh, beta, c_m, inv_ck = cf[12:16]
+    n_spans = d.span_type.size
+    n_q = d.modal_offset[-1]
+    head = d.y_star.size - 1
+    width = (d.interface_rhs_band.shape[1] - 1) // 2
+    n_steps = d.element.size
+    kappa, N0 = d.dropper_kappa, d.dropper_force
+    contact = bool(st.flags[0])
+    current = -1
+    report_every = max(1, n_steps // 100)
+    u, v, acc_s, e_vec, y = st.u, st.v, st.a, st.e, st.y
+    spans = [
+        (s, d.span_type[s], d.modal_offset[s], d.coupled[s, : d.n_coupled[d.span_type[s]]])
+        for s in range(n_spans)
+    ]
+    for k in range(1, n_steps):
+        if progress is not None and k % report_every == 0:
+            progress(k / n_steps)
+        c = d.config[k]
+        if c != st.flags[1]:
+            for s, _, off, _ in spans:
+                drop = slice(off + d.kept[c, s], d.modal_offset[s + 1])
+                for vec in (u, v, acc_s, e_vec, y):
+                    vec[drop] = 0.0
+            st.Bu[:] = _dropper_elongations(d, c, u)
+            st.Bv[:] = _dropper_elongations(d, c, v)
+            st.Ba[:] = _dropper_elongations(d, c, acc_s)
+            st.flags[1] = c
+            current = -1
+        el = d.element[k]
+        if el != current:
+            rows_q, rows_c = _element_rows(d, el)
+            p_b, comp, g_modal, g_full = _element_responses(d, c, el, rows_q, rows_c)
+            current = el
+        h = d.shape[k]
+        s_el = d.element_span[el]
+        kept = d.kept[c]
+        # 1. Interface part of K̂⁻¹ M e.
+        band = d.interface_rhs_band[c]
+        e_b = e_vec[n_q:]
+        z = band[width] * e_b
+        for kk in range(1, width + 1):
+            z[:-kk] += band[width + kk, :-kk] * e_b[kk:]
+            z[kk:] += band[width - kk, kk:] * e_b[:-kk]
+        for s, t, off, cpl in spans:
+            m = kept[s]
+            z[cpl] += d.coupling[t, : cpl.size, :m] @ (d.weight[t, :m] * e_vec[off : off + m])
+        x_b = _schur_solve(d, c, z)
+        g_c = [e_vec[n_q + cpl] - c_m * x_b[cpl] for s, t, off, cpl in spans]
+        # 2. Droppers' elongations of u_known.
+        dl_known = np.empty(N0.size)
+        for q in range(N0.size):
+            sd = d.dropper_span[q]
+            s, t, off, cpl = spans[sd]
+            m = kept[sd]
+            dl_known[q] = (
+                d.dropper_q[q, :m] @ e_vec[off : off + m]
+                + d.dropper_h[c, q, : cpl.size] @ g_c[sd]
+                + d.dropper_c[q, : cpl.size] @ x_b[cpl]
+            )
+        dl_known += inv_ck * (g1 * st.Bu + g2 * st.Bv + g3 * st.Ba)
+        rate_term = beta * d.dropper_rate * (a1 * st.Bu + a4 * st.Bv + a5 * st.Ba)
+        s, t, off, cpl = spans[s_el]
+        m = kept[s_el]
+        x_q = (e_vec[off : off + m] + g_c[s_el] @ d.coupling[t, : cpl.size, :m]) * d.inverse_diagonal[t, :m]
+        u_q = x_q + inv_ck * y[off : off + m]
+        u_c = x_b[cpl] + inv_ck * y[n_q + cpl]
+        wire = h @ (rows_q[:, :m] @ u_q + rows_c[:, : cpl.size] @ u_c)
+        rhs_p = d.pantograph_mass @ (a0 * st.y_p + a2 * st.yd_p + a3 * st.ydd_p) + d.pantograph_damping @ (
+            a1 * st.y_p + a4 * st.yd_p + a5 * st.ydd_p
+        )
+        y_known = d.pantograph_inverse @ (rhs_p + d.load_p)
+        gap_known = y_known[head] - d.wire_z[k] - wire
+        c_cc = h @ comp @ h + d.y_star[head]
+        g_dc = g_full @ h
+        gm_dc = g_modal @ h
+        G = d.dropper_flexibility[c]
+        # 3. Contact force and slack droppers (the exact passage's active set).
+        step = settle(contact, st.slack.copy(), gap_known, c_cc, g_dc, dl_known, rate_term, kh, kappa, N0, G)
+        contact, st.slack[:], f, idx, lam, elastic = step[:6]
+        st.flags[3] += 0 if step.resolved else 1
+        # 4. The response on the interface, then every span's modes with the Newmark update.
+        x_b = x_b + f * (p_b @ h) + lam @ d.dropper_interface[c, idx]
+        for s, t, off, cpl in spans:
+            m = kept[s]
+            fq = e_vec[off : off + m].copy()
+            if s == s_el:
+                fq += f * (h @ rows_q[:, :m])
+            for q, lq in zip(idx, lam, strict=True):
+                if d.dropper_span[q] == s:
+                    fq += lq * d.dropper_q_plain[q, :m]
+            fq += (e_vec[n_q + cpl] - c_m * x_b[cpl]) @ d.coupling[t, : cpl.size, :m]
+            p = slice(off, off + m)
+            u_new = fq * d.inverse_diagonal[t, :m] + inv_ck * y[p]
+            _newmark(u, v, acc_s, e_vec, y, p, u_new, cf)
+        _newmark(u, v, acc_s, e_vec, y, slice(n_q, None), x_b + inv_ck * y[n_q:], cf)
+        bu = dl_known + gm_dc * f + d.dropper_modal_flexibility[c][:, idx] @ lam
+        du = bu - st.Bu
+        ba = a0 * du - a2 * st.Bv - a3 * st.Ba
+        st.Bv[:] = a1 * du - a4 * st.Bv - a5 * st.Ba
+        st.Ba[:] = ba
+        st.Bu[:] = bu
+        du = y_known - f * d.y_star - st.y_p
+        acc_p = a0 * du - a2 * st.yd_p - a3 * st.ydd_p
+        st.yd_p[:] = a1 * du - a4 * st.yd_p - a5 * st.ydd_p
+        st.ydd_p[:] = acc_p
+        st.y_p[:] += du
+        st.force[k] = f
+        st.head_height[k] = st.y_p[head]
+        s, t, off, cpl = spans[s_el]
+        m = kept[s_el]
+        st.wire_uplift[k] = h @ (rows_q[:, :m] @ u[off : off + m] + rows_c[:, : cpl.size] @ u[n_q + cpl])
+        st.support_uplift[k] = u[n_q + d.support]
+        dropper = np.where(st.slack, 0.0, elastic)
+        np.minimum(st.dropper_min, dropper, out=st.dropper_min)
+        np.maximum(st.dropper_max, dropper, out=st.dropper_max)
+        st.flags[2] += 1 if idx.size else 0
+    st.flags[0] = int(contact)
+
+
+def _newmark(u, v, acc, e_vec, y, p, u_new, cf) -> None:
+    """Newmark update of the coordinates ``p`` to ``u_new``, and the next step's e and y there."""
+    du = u_new - u[p]
+    acc_new = cf[6] * du - cf[8] * v[p] - cf[9] * acc[p]
+    v_new = cf[7] * du - cf[10] * v[p] - cf[11] * acc[p]
+    u[p], v[p], acc[p] = u_new, v_new, acc_new
+    e_vec[p] = cf[0] * u_new + cf[1] * v_new + cf[2] * acc_new
+    y[p] = cf[3] * u_new + cf[4] * v_new + cf[5] * acc_new
