@@ -23,6 +23,7 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 
+from .cli_errors import interruption, print_error, raise_on_sigterm
 from .model.definition import CatenaryDefinition, DefinitionError
 from .model.design import Design, check_design, check_speed, level_design, presag_design
 from .model.presets import catenary_names, load_catenary, load_pantograph, pantograph_names, preset_path
@@ -35,6 +36,7 @@ from .pipeline import (
     simulate,
     solve_static,
 )
+from .statics.shape_finding import ShapeFindingError
 
 
 class Progress:
@@ -380,6 +382,9 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, Callable[[argpars
         description=__doc__.split("\n\n")[0],
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
+    parser.add_argument(
+        "--debug", action="store_true", help="show the traceback of an error instead of its one-line message"
+    )
     sub = parser.add_subparsers(dest="command", required=True)
     handlers: dict[str, Callable[[argparse.Namespace], int]] = {}
 
@@ -435,17 +440,24 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, Callable[[argpars
     return parser, handlers
 
 
+USER_ERRORS = (DefinitionError, ShapeFindingError, ValueError, KeyError, OSError)
+"""Failures the user causes (a file, a field, an option value, a path): one line and exit status 2."""
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser, handlers = build_parser()
     args = parser.parse_args(argv)
+    raise_on_sigterm()
     try:
         return handlers[args.command](args)
-    except (DefinitionError, ValueError) as error:
-        print(f"catenary {args.command}: error: {error}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print(f"\ncatenary {args.command}: interrupted", file=sys.stderr)
-        return 130
+    except USER_ERRORS as error:
+        if args.debug:
+            raise
+        return print_error(args.command, error)
+    except KeyboardInterrupt as error:
+        how, status = interruption(error)
+        print(f"\ncatenary {args.command}: {how}", file=sys.stderr)
+        return status
 
 
 if __name__ == "__main__":

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from catenary_env.cli_errors import raise_on_sigterm
+
 from .cli import DESCRIPTION, add_arguments, run
 
 
@@ -12,14 +14,9 @@ def main() -> int:
     """Parse the command line and run the optimisation."""
     parser = argparse.ArgumentParser(prog="python -m optimizers", description=DESCRIPTION)
     add_arguments(parser)
-    try:
-        return run(parser.parse_args())
-    except KeyboardInterrupt:
-        print(
-            "\noptimize: interrupted (the evaluations done are in the store: re-run with --resume)",
-            file=sys.stderr,
-        )
-        return 130
+    args = parser.parse_args()
+    raise_on_sigterm()
+    return run(args)
 
 
 if __name__ == "__main__":  # guarded: worker processes are spawned and re-import this module

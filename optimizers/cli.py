@@ -16,6 +16,8 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
+from catenary_env.cli_errors import interruption, print_error
+
 from . import ga, nevergrad_adapters  # noqa: F401  (register the built-in optimisers)
 from .base import OPTIMIZERS, OptimizationResult
 from .store import StoreError
@@ -143,15 +145,21 @@ def add_commands(subparsers: Any) -> dict[str, Callable[[argparse.Namespace], in
 
 
 def run(args: argparse.Namespace) -> int:
-    """Execute ``optimize``; return the exit status (0, or 2 for bad input)."""
+    """Execute ``optimize``; return the exit status (0; 2 for bad input; 130 or 143 when interrupted)."""
     try:
         result = _run_optimizer(args) if args.optimizer not in RL_OPTIMIZERS else _run_rl(args)
-    except (StoreError, ImportError, ValueError, TypeError) as error:
-        print(f"optimize: error: {error}", file=sys.stderr)
-        return 2
-    except KeyError as error:
-        print(f"optimize: error: {error.args[0] if error.args else error}", file=sys.stderr)
-        return 2
+    except (StoreError, ImportError, ValueError, TypeError, KeyError, OSError) as error:
+        if getattr(args, "debug", False):
+            raise
+        return print_error("optimize", error)
+    except KeyboardInterrupt as error:
+        how, status = interruption(error)
+        print(
+            f"\ncatenary optimize: {how}; the evaluations completed are in {args.store}: run the same "
+            "command with --resume to continue",
+            file=sys.stderr,
+        )
+        return status
     if args.json:
         print(json.dumps(result.to_dict()))
     else:

@@ -8,7 +8,9 @@ outcomes back in the batch's order before telling the optimiser.
 
 - :class:`InProcessBackend`: one after the other in this process (``n_workers=1``).
 - :class:`ProcessPoolBackend`: ``n_workers`` local processes (``concurrent.futures``, spawned, so that
-  nothing of the parent's threads is inherited).
+  nothing of the parent's threads is inherited). The workers die with the run: stopped at once when it
+  ends by an error, Ctrl-C or SIGTERM, and gone within a second or two after a SIGKILL of the run
+  (:func:`die_with_parent`).
 - :class:`DaskBackend`: a Dask distributed cluster at a scheduler address (``pip install
   catenary-env[parallel]``).
 
@@ -25,7 +27,13 @@ Examples
 from __future__ import annotations
 
 import concurrent.futures
+import ctypes
 import multiprocessing
+import os
+import signal
+import sys
+import threading
+import time
 from collections.abc import Iterator, Sequence
 from types import TracebackType
 from typing import Any, Protocol
@@ -38,6 +46,7 @@ __all__ = [
     "InProcessBackend",
     "ProcessPoolBackend",
     "SimulationArguments",
+    "die_with_parent",
     "make_backend",
 ]
 
@@ -92,6 +101,40 @@ class InProcessBackend(_Closing):
             yield position, simulate(*arguments)
 
 
+_PR_SET_PDEATHSIG = 1
+"""``prctl`` option of Linux (``<linux/prctl.h>``): the signal a process gets when its parent dies."""
+
+PARENT_POLL_INTERVAL = 1.0
+"""Seconds between two checks of a worker that the run which started it is still alive."""
+
+
+def die_with_parent(parent_pid: int) -> None:
+    """Make this worker process exit when the process ``parent_pid`` that started it dies.
+
+    The initializer of the local workers. A SIGKILLed run cannot stop its workers, and they would live on
+    under init (each holding a model in memory) until their queue breaks. On Linux the kernel sends them
+    SIGKILL when the run dies (``prctl(PR_SET_PDEATHSIG)``); everywhere, and in case the run died before
+    that call, a daemon thread checks every :data:`PARENT_POLL_INTERVAL` that the parent is still the run.
+
+    Parameters
+    ----------
+    parent_pid : int
+        Process id of the run (``os.getpid()`` in the process that starts the pool).
+    """
+    if sys.platform.startswith("linux"):
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+        except (OSError, AttributeError):  # no libc symbol: the thread below still does the job
+            pass
+    threading.Thread(target=_exit_when_orphaned, args=(parent_pid,), daemon=True).start()
+
+
+def _exit_when_orphaned(parent_pid: int) -> None:
+    while os.getppid() == parent_pid:
+        time.sleep(PARENT_POLL_INTERVAL)
+    os._exit(1)  # no clean-up: the run that would read this worker's results is gone
+
+
 class ProcessPoolBackend(_Closing):
     """Simulate on ``n_workers`` local worker processes.
 
@@ -107,7 +150,9 @@ class ProcessPoolBackend(_Closing):
             raise ValueError(f"n_workers = {n_workers}: must be at least 1")
         self.description = f"{n_workers} local processes"
         context = multiprocessing.get_context("spawn")
-        self._pool = concurrent.futures.ProcessPoolExecutor(max_workers=n_workers, mp_context=context)
+        self._pool = concurrent.futures.ProcessPoolExecutor(
+            max_workers=n_workers, mp_context=context, initializer=die_with_parent, initargs=(os.getpid(),)
+        )
 
     def run(
         self, simulate: SimulateFunction, batch: Sequence[SimulationArguments]
@@ -128,8 +173,18 @@ class ProcessPoolBackend(_Closing):
     def __exit__(
         self, kind: type[BaseException] | None, error: BaseException | None, trace: TracebackType | None
     ) -> None:
-        # On an error or Ctrl-C, do not wait for the simulations in flight: their results are lost anyway.
-        self._pool.shutdown(wait=kind is None, cancel_futures=True)
+        if kind is None:
+            self.close()
+            return
+        # On an error, Ctrl-C or SIGTERM, stop the simulations in flight: their results are lost anyway,
+        # and a worker left running would keep the interpreter's exit waiting for it. (``_processes`` is
+        # private; Python 3.14's ``terminate_workers`` does the same.)
+        workers = list((self._pool._processes or {}).values())
+        self._pool.shutdown(wait=False, cancel_futures=True)
+        for worker in workers:
+            worker.terminate()
+        for worker in workers:
+            worker.join(timeout=5.0)
 
 
 class DaskBackend(_Closing):

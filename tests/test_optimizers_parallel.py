@@ -3,6 +3,11 @@
 from __future__ import annotations
 
 import dataclasses
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import pytest
 from conftest import requires
@@ -51,3 +56,55 @@ def test_runs_are_identical_on_every_backend(cluster, optimizer):
     assert _comparable(processes.history) == _comparable(local.history)
     assert _comparable(dask.history) == _comparable(local.history)
     assert dask.best_x == local.best_x and dask.n_simulations == 120
+
+
+def _children(pid: int) -> set[int]:
+    """Process ids whose parent is ``pid`` (Linux /proc)."""
+    children = set()
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):  # the process ended while we looked
+            continue
+        if int(fields[1]) == pid:
+            children.add(int(stat.parent.name))
+    return children
+
+
+def _alive(pids: set[int]) -> set[int]:
+    alive = set()
+    for pid in pids:
+        try:
+            state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+        except (OSError, IndexError):
+            continue
+        if state != "Z":  # a zombie has exited (it waits for init to reap it)
+            alive.add(pid)
+    return alive
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads the process table in /proc")
+@pytest.mark.parametrize("kill", [signal.SIGKILL, signal.SIGTERM], ids=["SIGKILL", "SIGTERM"])
+def test_a_killed_run_leaves_no_worker_alive(tmp_path, kill):
+    command = [
+        sys.executable, "-m", "catenary_env.cli", "optimize", "synthetic-quadratic-slow",
+        "--budget", "100000", "--workers", "2", "--fidelity", "test",
+        "--store", str(tmp_path / "runs.sqlite"), "--quiet",
+    ]  # fmt: skip
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60.0
+    while len(_children(process.pid)) < 3 and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.1)  # the 2 workers and multiprocessing's resource tracker
+    time.sleep(1.0)  # the workers are simulating
+    workers = _children(process.pid)
+    assert len(workers) >= 2, "the run did not start its workers"
+    process.send_signal(kill)
+    _, stderr = process.communicate(timeout=30.0)
+    deadline = time.monotonic() + 10.0
+    while _alive(workers) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not _alive(workers)
+    if kill == signal.SIGTERM:
+        assert process.returncode == 128 + signal.SIGTERM
+        assert "terminated (SIGTERM)" in stderr and "--resume" in stderr
+        assert "Traceback" not in stderr
