@@ -135,3 +135,20 @@ def test_pipeline_runs_the_span_mode_model(benchmark_catenary, benchmark_pantogr
     assert study.feasible == exact.feasible
     assert study.statistics.std == pytest.approx(exact.statistics.std, rel=0.02)
     assert study.statistics.mean == pytest.approx(exact.statistics.mean, rel=0.005)
+
+
+def test_evaluation_stops_one_span_after_the_analysis_section_without_changing_it(
+    benchmark_catenary, benchmark_pantograph_definition
+):
+    from catenary_env.pipeline import simulate_static, solve_static
+
+    fidelity = Fidelity(
+        n_spans=7, analysis_spans=3, contact_wire_element=1.0, messenger_wire_element=2.0, time_step=2e-3
+    )
+    static = solve_static(benchmark_catenary, level_design(benchmark_catenary), fidelity)
+    args = (static, benchmark_pantograph_definition, SPEED, fidelity, 190.0)
+    whole = simulate_static(*args)
+    short = simulate_static(*args, statistics_only=True)
+    assert short.trajectory.position[-1] == pytest.approx(6 * benchmark_catenary.span_length, abs=1.0)
+    for name, value in whole.statistics.as_dict().items():
+        assert getattr(short.statistics, name) == pytest.approx(value, rel=1e-6, abs=1e-9), name
