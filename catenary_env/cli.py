@@ -15,15 +15,19 @@ Bad input exits with status 2 and a message naming the field and its range, befo
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import importlib.metadata
 import json
+import math
 import shutil
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
+from typing import NoReturn
 
-from .cli_errors import interruption, print_error, raise_on_sigterm
+from .cli_errors import EXIT_USAGE, UsageError, check_output_path, interruption, print_error, raise_on_sigterm
 from .model.definition import CatenaryDefinition, DefinitionError
 from .model.design import Design, check_design, check_speed, level_design, presag_design
 from .model.presets import catenary_names, load_catenary, load_pantograph, pantograph_names, preset_path
@@ -132,6 +136,38 @@ def _fidelity(catenary: CatenaryDefinition, args: argparse.Namespace) -> Fidelit
     )
 
 
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse an output file that cannot be written before computing anything."""
+    if args.plot:
+        check_output_path(args.plot, "--plot")
+
+
+def _design_options(args: argparse.Namespace | None) -> str:
+    """The options that chose the design, as typed (for a message)."""
+    if args is None:
+        return "the level reference design (used to calibrate the uplift)"
+    parts = []
+    if args.presag is not None:
+        parts.append(f"--presag {args.presag:g}")
+    if args.offsets is not None:
+        parts.append("--offsets " + " ".join(f"{v:g}" for v in args.offsets))
+    if args.droppers is not None:
+        parts.append("--droppers " + " ".join(f"{v:g}" for v in args.droppers))
+    return " ".join(parts) or f"the level design of {args.preset}"
+
+
+@contextlib.contextmanager
+def _static_shape_of(args: argparse.Namespace | None) -> Iterator[None]:
+    """Name the design options when the catenary finds no static shape for them."""
+    try:
+        yield
+    except ShapeFindingError as error:
+        raise UsageError(
+            f"{_design_options(args)}: the catenary finds no static equilibrium for this design ({error}); "
+            "give a smaller pre-sag or smaller offsets (a few centimetres)"
+        ) from error
+
+
 def _save(fig, path: str) -> None:  # noqa: ANN001
     fig.tight_layout()
     fig.savefig(path, dpi=120)
@@ -141,11 +177,15 @@ def _save(fig, path: str) -> None:  # noqa: ANN001
 def cmd_static(args: argparse.Namespace) -> int:
     from .analysis.static_analysis import stiffness_profile
 
+    _check_outputs(args)
+    if args.points < 2:
+        raise UsageError(f"--points {args.points}: give at least 2 load points along the span")
     catenary = load_catenary(args.preset)
     design = _design(catenary, args)
     fidelity = _fidelity(catenary, args)
     start = time.perf_counter()
-    static = solve_static(catenary, design, fidelity)
+    with _static_shape_of(args):
+        static = solve_static(catenary, design, fidelity)
     elapsed = time.perf_counter() - start
     lay = static.layout
     central = lay.dropper_span == lay.n_spans // 2
@@ -222,6 +262,9 @@ def cmd_static(args: argparse.Namespace) -> int:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
+    _check_outputs(args)
+    if args.target_mean is not None and not (math.isfinite(args.target_mean) and args.target_mean > 0.0):
+        raise UsageError(f"--target-mean {args.target_mean}: must be a mean contact force > 0 N")
     catenary = load_catenary(args.preset)
     pantograph = load_pantograph(args.pantograph or catenary.pantograph)
     design = _design(catenary, args)
@@ -238,10 +281,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             "design...",
             file=sys.stderr,
         )
-        uplift = calibrate_uplift(catenary, pantograph, level_design(catenary), speed, fidelity, target)
+        with _static_shape_of(None):
+            uplift = calibrate_uplift(catenary, pantograph, level_design(catenary), speed, fidelity, target)
     progress = Progress("simulate", args.json)
     start = time.perf_counter()
-    sim = simulate(catenary, pantograph, design, speed, fidelity, uplift, progress=progress)
+    with _static_shape_of(args):
+        sim = simulate(catenary, pantograph, design, speed, fidelity, uplift, progress=progress)
     elapsed = time.perf_counter() - start
     stats = sim.statistics.as_dict()
     result = {
@@ -333,10 +378,19 @@ def format_validation(report) -> str:  # noqa: ANN001
 def cmd_presets(args: argparse.Namespace) -> int:
     if args.copy:
         name, dest = args.copy
-        kind = "catenary" if name in catenary_names() else "pantograph"
+        kind = "pantograph" if args.pantograph else "catenary"
+        names = pantograph_names() if args.pantograph else catenary_names()
+        if name not in names:
+            other = "" if args.pantograph else " (for a pantograph preset add --pantograph)"
+            raise UsageError(f"--copy {name}: unknown {kind} preset; available: {', '.join(names)}{other}")
+        check_output_path(dest, "--copy")
+        if Path(dest).exists() and not args.force:
+            raise UsageError(f"--copy {name} {dest}: the file exists; add --force to overwrite it")
         shutil.copyfile(preset_path(kind, name), dest)
         print(f"copied the {kind} preset '{name}' to {dest}: edit it and pass the path instead of the name")
         return 0
+    if args.pantograph or args.force:
+        raise UsageError("--pantograph and --force go with --copy NAME DEST")
     print("catenaries: " + ", ".join(catenary_names()))
     print("pantographs: " + ", ".join(pantograph_names()))
     return 0
@@ -376,8 +430,15 @@ def _optional_commands(sub: argparse._SubParsersAction) -> dict[str, Handler]:
     return {"evaluate": cli_evaluate.run, **_plugin_commands(sub)}
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line, like the commands' own (cli_errors.py)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see: {self.prog} --help)\n")
+
+
 def build_parser() -> tuple[argparse.ArgumentParser, dict[str, Callable[[argparse.Namespace], int]]]:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="catenary",
         description=__doc__.split("\n\n")[0],
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -433,7 +494,11 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, Callable[[argpars
     handlers["validate"] = cmd_validate
 
     p = sub.add_parser("presets", help="list the presets, or copy one to edit")
-    p.add_argument("--copy", nargs=2, metavar=("NAME", "DEST"), help="copy a preset's TOML file to DEST")
+    p.add_argument(
+        "--copy", nargs=2, metavar=("NAME", "DEST"), help="copy a catenary preset's TOML file to DEST"
+    )
+    p.add_argument("--pantograph", action="store_true", help="with --copy: copy the pantograph preset NAME")
+    p.add_argument("--force", action="store_true", help="with --copy: overwrite DEST if it exists")
     handlers["presets"] = cmd_presets
 
     handlers.update(_optional_commands(sub))

@@ -16,10 +16,11 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
-from catenary_env.cli_errors import interruption, print_error
+from catenary_env.cli_errors import UsageError, interruption, print_error
 
 from . import ga, nevergrad_adapters  # noqa: F401  (register the built-in optimisers)
 from .base import OPTIMIZERS, OptimizationResult
+from .progress import LOG_INTERVAL
 from .store import StoreError
 
 __all__ = ["DEFAULT_STORE", "add_arguments", "add_commands", "add_parser", "run"]
@@ -97,7 +98,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--resume",
         action="store_true",
         help="continue the latest run in the store with the same problem, optimiser, budget, seed, "
-        "speed and fidelity: its stored evaluations are replayed, not simulated",
+        "speed and fidelity: its stored evaluations are replayed, not simulated; refused, listing the "
+        "store's runs, when it holds none",
+    )
+    parser.add_argument(
+        "--resume-or-start",
+        action="store_true",
+        help="like --resume, but start the run when the store holds none (for a command re-run until done)",
     )
     parser.add_argument(
         "--workers",
@@ -126,7 +133,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="print the result (best design in m, best sigma in N, the full history) as JSON",
     )
-    parser.add_argument("--quiet", action="store_true", help="no progress line on stderr")
+    parser.add_argument(
+        "--quiet", action="store_true", help="no progress on stderr (neither the line nor the log lines)"
+    )
+    parser.add_argument(
+        "--progress-every",
+        type=float,
+        default=LOG_INTERVAL,
+        metavar="S",
+        help="when stderr is not a terminal (a log, nohup), a progress line every S seconds "
+        f"(default: {LOG_INTERVAL:g})",
+    )
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -172,11 +189,17 @@ def _run_optimizer(args: argparse.Namespace) -> OptimizationResult:
 
     if args.speed_range is not None:
         raise ValueError("--speed-range is for --optimizer ppo; the other optimisers design for one --speed")
+    if args.scheduler and args.workers is not None:
+        raise UsageError(
+            f"--workers {args.workers} with --scheduler {args.scheduler}: the cluster's workers run the "
+            "simulations; give one of the two"
+        )
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     return optimize(
         args.problem, args.optimizer, args.budget, args.seed, speed_kmh=args.speed, fidelity=args.fidelity,
-        store=args.store, resume=args.resume, n_workers=workers, scheduler=args.scheduler,
-        max_evaluations=args.max_evaluations, quiet=args.quiet,
+        store=args.store, resume=args.resume or args.resume_or_start, start_if_none=args.resume_or_start,
+        n_workers=workers, scheduler=args.scheduler,
+        max_evaluations=args.max_evaluations, quiet=args.quiet, progress_interval=args.progress_every,
     )  # fmt: skip
 
 
@@ -200,8 +223,9 @@ def _run_rl(args: argparse.Namespace) -> OptimizationResult:
         f"Catenary-{problem.name}-v0", None if speed_range else args.speed, speed_range, args.fidelity
     )
     _, result = train_design_policy(
-        spec, problem, args.budget, args.seed, store=args.store, resume=args.resume, quiet=args.quiet
-    )
+        spec, problem, args.budget, args.seed, store=args.store, resume=args.resume or args.resume_or_start,
+        start_if_none=args.resume_or_start, quiet=args.quiet,
+    )  # fmt: skip
     return result
 
 

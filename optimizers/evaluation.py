@@ -104,6 +104,9 @@ class InProcessBackend(_Closing):
 _PR_SET_PDEATHSIG = 1
 """``prctl`` option of Linux (``<linux/prctl.h>``): the signal a process gets when its parent dies."""
 
+SCHEDULER_TIMEOUT = 10.0
+"""Seconds to wait for a Dask scheduler to answer before giving up."""
+
 PARENT_POLL_INTERVAL = 1.0
 """Seconds between two checks of a worker that the run which started it is still alive."""
 
@@ -205,7 +208,13 @@ class DaskBackend(_Closing):
                 "--scheduler needs Dask distributed: pip install catenary-env[parallel]"
             ) from error
         self.description = f"Dask cluster at {scheduler}"
-        self._client = Client(scheduler)
+        try:
+            self._client = Client(scheduler, timeout=SCHEDULER_TIMEOUT)
+        except (OSError, TimeoutError, ValueError) as error:
+            raise ConnectionError(
+                f"--scheduler {scheduler}: no Dask scheduler answered within {SCHEDULER_TIMEOUT:g} s "
+                f"({type(error).__name__}: {error}); check the address, or start one with: dask scheduler"
+            ) from error
 
     def run(
         self, simulate: SimulateFunction, batch: Sequence[SimulationArguments]

@@ -33,13 +33,41 @@ def options_json(options: Any) -> str:
     return json.dumps(dataclasses.asdict(options), sort_keys=True)
 
 
-def open_run(store: RunStore, config: RunConfig, resume: bool) -> int:
-    """The run to write into: with ``resume`` the latest stored run of this configuration if any, else new."""
+def open_run(
+    store: RunStore, config: RunConfig, resume: bool, start_if_none: bool = True
+) -> tuple[int, bool]:
+    """The run to write into and whether it is resumed.
+
+    With ``resume``: the latest stored run of this configuration; when there is none, a new run if
+    ``start_if_none``, else :class:`StoreError` listing the runs the store holds. Without: a new run.
+    """
     if resume:
         run_id = store.find_run(config)
         if run_id is not None:
-            return run_id
-    return store.start_run(config)
+            return run_id, True
+        if not start_if_none:
+            raise StoreError(f"{store.path}: {_no_run_to_resume(store, config)}")
+    return store.start_run(config), False
+
+
+def _no_run_to_resume(store: RunStore, config: RunConfig) -> str:
+    """Why nothing matches --resume: the configuration asked and the runs the store holds."""
+    speed = "a speed range" if config.speed_kmh is None else f"speed {config.speed_kmh:g} km/h"
+    asked = (
+        f"{config.optimizer} on {config.problem}, budget {config.budget}, seed {config.seed}, {speed}, "
+        f"fidelity {config.fidelity}"
+    )
+    runs = store.runs()
+    found = "; ".join(
+        f"run {r['run_id']}: {r['optimizer']} on {r['problem']}, budget {r['budget']}, seed {r['seed']}, "
+        f"fidelity {r['fidelity']}"
+        for r in runs[-5:]
+    )
+    held = f"it holds {len(runs)} run(s), the latest: {found}" if runs else "it holds no run"
+    return (
+        f"no run to resume with {asked} (and these optimiser settings); {held}. Give that run's options, "
+        "or start anew: drop --resume (or use --resume-or-start)"
+    )
 
 
 class RunRecorder:
@@ -59,6 +87,8 @@ class RunRecorder:
         ``"simulation"`` (our evaluations: served as cache) or ``"env"`` (an env's: not served).
     progress : ProgressDisplay
         Refreshed as evaluations are appended.
+    resumed : bool
+        The run is resumed: say so, with the number of evaluations that will be replayed.
     """
 
     def __init__(
@@ -69,6 +99,7 @@ class RunRecorder:
         space: GridSpace,
         source: str,
         progress: ProgressDisplay,
+        resumed: bool = False,
     ) -> None:
         self.store = store
         self.run_id = run_id
@@ -80,6 +111,13 @@ class RunRecorder:
         self.n_charged = 0
         self._stored = store.evaluations(run_id)
         self._best_sigma: float | None = None
+        self._done_in_batch = 0  # persisted, not yet appended
+        self._charged_in_batch = 0
+        if resumed:
+            progress.note(
+                f"resuming run {run_id} of {store.path}: its {len(self._stored)} stored evaluations are "
+                "replayed, not simulated"
+            )
 
     @property
     def next_index(self) -> int:
@@ -109,6 +147,14 @@ class RunRecorder:
         """Commit a new evaluation to the store (never a replayed one)."""
         problem, fidelity = self.config.problem, self.config.fidelity
         self.store.add_evaluation(self.run_id, problem, fidelity, design_key, record, self.source, reward)
+        # The batch is appended to the history when it is complete; show each evaluation as it is done.
+        self._done_in_batch += 1
+        self._charged_in_batch += int(record.charged)
+        if record.loss != float("inf") and (self._best_sigma is None or record.loss < self._best_sigma):
+            self._best_sigma = record.loss
+        self.progress.update(
+            self.n_charged + self._charged_in_batch, len(self.history) + self._done_in_batch, self._best_sigma
+        )
 
     def append(self, record: EvaluationRecord) -> None:
         """Add the next evaluation of the history."""
@@ -116,6 +162,9 @@ class RunRecorder:
             raise RuntimeError(f"evaluation {record.index} appended as number {self.next_index}")
         self.history.append(record)
         self.n_charged += int(record.charged)
+        # (a replayed record was not persisted: the counts of the batch only reach 0 sooner, never below)
+        self._done_in_batch = max(0, self._done_in_batch - 1)
+        self._charged_in_batch = max(0, self._charged_in_batch - int(record.charged))
         if record.loss != float("inf") and (self._best_sigma is None or record.loss < self._best_sigma):
             self._best_sigma = record.loss
         self.progress.update(self.n_charged, len(self.history), self._best_sigma)

@@ -267,6 +267,7 @@ def train_design_policy(
     options: PPOOptions | None = None,
     store: RunStore | str | os.PathLike[str] | None = None,
     resume: bool = False,
+    start_if_none: bool = True,
     quiet: bool = True,
 ) -> tuple[DesignPolicy, OptimizationResult]:
     """Train a PPO design policy for exactly ``budget`` env steps (simulations).
@@ -287,6 +288,9 @@ def train_design_policy(
         Run store; default in memory.
     resume : bool
         Continue the latest stored run of the same configuration (replaying its steps).
+    start_if_none : bool
+        With ``resume``, start a new run when the store holds none of this configuration (else
+        :class:`~optimizers.store.StoreError` lists the runs it holds).
     quiet : bool
         No progress display.
 
@@ -310,9 +314,9 @@ def train_design_policy(
         run_store = (
             store if isinstance(store, RunStore) else stack.enter_context(RunStore(store or ":memory:"))
         )
-        run_id = open_run(run_store, config, resume)
+        run_id, resumed = open_run(run_store, config, resume, start_if_none)
         progress = ProgressDisplay(f"ppo on {space.name}", int(budget), quiet=quiet)
-        recorder = RunRecorder(run_store, run_id, config, space, "env", progress)
+        recorder = RunRecorder(run_store, run_id, config, space, "env", progress, resumed)
         vec_env = _vector_env(env_spec, recorder, space, settings)
         stack.callback(vec_env.close)
         model = sb3.PPO(

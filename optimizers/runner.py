@@ -36,7 +36,7 @@ from .base import EvaluationRecord, OptimizationResult, Optimizer, get_optimizer
 from .evaluation import EvaluationBackend, make_backend
 from .problem import GridProblem, GridSpace, Outcome
 from .problem_registry import resolve_problem
-from .progress import ProgressDisplay
+from .progress import LOG_INTERVAL, ProgressDisplay
 from .recorder import RunRecorder, open_run, options_json, package_version
 from .store import RunConfig, RunStore
 
@@ -54,10 +54,12 @@ def optimize(
     options: Any = None,
     store: RunStore | str | os.PathLike[str] | None = None,
     resume: bool = False,
+    start_if_none: bool = True,
     n_workers: int = 1,
     scheduler: str | None = None,
     max_evaluations: int | None = None,
     quiet: bool = True,
+    progress_interval: float = LOG_INTERVAL,
 ) -> OptimizationResult:
     """Run a registered optimiser on a problem and return its result.
 
@@ -81,6 +83,9 @@ def optimize(
         The run store; default: a store in memory (nothing kept after the call).
     resume : bool
         Continue the latest stored run of the same configuration instead of starting a new one.
+    start_if_none : bool
+        With ``resume``, start a new run when the store holds none of this configuration (else
+        :class:`~optimizers.store.StoreError` lists the runs it holds).
     n_workers : int
         Local worker processes for the simulations (1: in this process).
     scheduler : str, optional
@@ -88,7 +93,9 @@ def optimize(
     max_evaluations : int, optional
         Cap on evaluations, free cache hits included; default 10 × budget.
     quiet : bool
-        No progress display (it is shown only on a terminal anyway).
+        No progress display.
+    progress_interval : float
+        Seconds between two progress lines when stderr is not a terminal.
     """
     grid_problem = resolve_problem(problem)
     space = GridSpace.from_problem(grid_problem)
@@ -113,9 +120,11 @@ def optimize(
         run_store = (
             store if isinstance(store, RunStore) else stack.enter_context(RunStore(store or ":memory:"))
         )
-        run_id = open_run(run_store, config, resume)
-        progress = ProgressDisplay(f"{optimizer} on {space.name}", int(budget), quiet=quiet)
-        recorder = RunRecorder(run_store, run_id, config, space, "simulation", progress)
+        run_id, resumed = open_run(run_store, config, resume, start_if_none)
+        progress = ProgressDisplay(
+            f"{optimizer} on {space.name}", int(budget), quiet=quiet, interval=progress_interval
+        )
+        recorder = RunRecorder(run_store, run_id, config, space, "simulation", progress, resumed)
         backend = stack.enter_context(make_backend(n_workers, scheduler))
         engine = spec.optimizer_class(space, int(budget), int(seed), settings)  # type: ignore[call-arg]
         loop = _BatchEvaluator(grid_problem, space, recorder, backend, cap)

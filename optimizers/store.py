@@ -30,6 +30,7 @@ True
 from __future__ import annotations
 
 import datetime
+import functools
 import json
 import os
 import sqlite3
@@ -199,11 +200,33 @@ class RunStore:
             raise StoreError(
                 f"{self.path}: run store schema version {version}, this code reads version {SCHEMA_VERSION}"
             )
+        self._check_integrity()
         if self.path != ":memory:":
             # WAL: a committed evaluation survives a SIGKILL; NORMAL sync is durable against a process
             # crash (only a power cut can lose the last commits).
             connection.execute("PRAGMA journal_mode=WAL")
             connection.execute("PRAGMA synchronous=NORMAL")
+
+    def _check_integrity(self) -> None:
+        """Refuse a damaged file (SQLite's own page checks) or one whose tables are not the schema's."""
+        problems = [row[0] for row in self._connection.execute("PRAGMA quick_check(3)").fetchall()]
+        if problems != ["ok"]:
+            self._connection.close()
+            raise StoreError(
+                f"{self.path}: the run store is damaged ({'; '.join(problems)}); refusing to use it: "
+                "restore it from a copy, or give another --store path"
+            )
+        for table, columns in _schema_columns().items():
+            found = {row[1] for row in self._connection.execute(f"PRAGMA table_info({table})")}
+            if not columns <= found:
+                self._connection.close()
+                missing = (
+                    "the table is missing" if not found else f"columns missing: {sorted(columns - found)}"
+                )
+                raise StoreError(
+                    f"{self.path}: table {table!r} of the run store is damaged ({missing}); refusing to use "
+                    "it: restore it from a copy, or give another --store path"
+                )
 
     def _create(self) -> None:
         with self._connection:
@@ -299,14 +322,14 @@ class RunStore:
             (run_id,),
         ).fetchall()
         stored: dict[int, StoredEvaluation] = {}
-        for idx, x, feasible, sigma, reason, wall_time, cached, charged, speed, key, reward in rows:
-            record = EvaluationRecord(
-                int(idx), tuple(float(v) for v in json.loads(x)), bool(feasible),
-                None if sigma is None else float(sigma), str(reason), float(wall_time), bool(cached),
-                bool(charged), float(speed),
-            )  # fmt: skip
-            design_key = tuple(int(k) for k in key.split(",")) if key else ()
-            stored[int(idx)] = StoredEvaluation(record, design_key, None if reward is None else float(reward))
+        for row in rows:
+            try:
+                stored[int(row[0])] = _stored_evaluation(*row)
+            except (ValueError, TypeError) as error:  # json.JSONDecodeError is a ValueError
+                raise StoreError(
+                    f"{self.path}: run {run_id}, evaluation row {row[0]} is damaged ({error}); the run "
+                    "cannot be resumed: start it anew without --resume, or in another --store"
+                ) from None
         return stored
 
     def lookup(
@@ -342,6 +365,35 @@ class RunStore:
         self, kind: type[BaseException] | None, error: BaseException | None, trace: TracebackType | None
     ) -> None:
         self.close()
+
+
+@functools.cache
+def _schema_columns() -> dict[str, frozenset[str]]:
+    """The columns of each table of the schema, read from a database made with it."""
+    connection = sqlite3.connect(":memory:")
+    try:
+        connection.executescript(_SCHEMA)
+        query = "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%'"
+        tables = [row[0] for row in connection.execute(query)]
+        return {t: frozenset(row[1] for row in connection.execute(f"PRAGMA table_info({t})")) for t in tables}
+    finally:
+        connection.close()
+
+
+def _stored_evaluation(
+    idx: int, x: str, feasible: int, sigma: float | None, reason: str, wall_time: float, cached: int,
+    charged: int, speed: float, key: str, reward: float | None,
+) -> StoredEvaluation:  # fmt: skip
+    """An evaluation row read back; ValueError or TypeError when a field is not what was written."""
+    values = json.loads(x)
+    if not isinstance(values, list):
+        raise ValueError(f"x = {x!r} is not a list of numbers")
+    record = EvaluationRecord(
+        int(idx), tuple(float(v) for v in values), bool(feasible), None if sigma is None else float(sigma),
+        str(reason), float(wall_time), bool(cached), bool(charged), float(speed),
+    )  # fmt: skip
+    design_key = tuple(int(k) for k in key.split(",")) if key else ()
+    return StoredEvaluation(record, design_key, None if reward is None else float(reward))
 
 
 def _check_header(path: Path) -> None:

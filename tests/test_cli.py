@@ -77,6 +77,20 @@ def test_presets_lists_and_copies(tmp_path, capsys):
     assert main(["static", str(target), "--fidelity", "test", "--json"]) == 0
 
 
+def test_presets_copy_refuses_to_overwrite_without_force_and_copies_pantographs(tmp_path, capsys):
+    mine = tmp_path / "mine.toml"
+    mine.write_text("# my edits\n")
+    assert main(["presets", "--copy", "benchmark", str(mine)]) == 2
+    assert "--force" in capsys.readouterr().err and mine.read_text() == "# my edits\n"
+    assert main(["presets", "--copy", "benchmark", str(mine), "--force"]) == 0
+    assert "span_length" in mine.read_text()
+    head = tmp_path / "head.toml"
+    assert main(["presets", "--copy", "benchmark", str(head), "--pantograph"]) == 0
+    assert "masses" in head.read_text() and "the pantograph preset" in capsys.readouterr().out
+    assert main(["simulate", "benchmark", "--speed", "250", "--pantograph", str(head), "--uplift", "120",
+                 "--fidelity", "test", "--json"]) == 0  # fmt: skip
+
+
 def test_the_packages_above_plug_their_commands_in():
     _, handlers = cli.build_parser()
     assert {"optimize", "experiment", "report"} <= set(handlers)  # entry points, not imports

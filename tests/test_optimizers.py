@@ -9,6 +9,8 @@ import dataclasses
 import functools
 import io
 import sqlite3
+import subprocess
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -412,20 +414,75 @@ def test_resume_refuses_a_run_that_does_not_replay(tmp_path):
         optimize(QUADRATIC, "random", budget=10, seed=4, store=path, resume=True)
 
 
-def test_progress_display_shows_best_sigma_on_a_terminal_only():
-    class Terminal(io.StringIO):
-        def isatty(self):
-            return True
+class _Terminal(io.StringIO):
+    def isatty(self):
+        return True
 
-    terminal = Terminal()
+
+def test_progress_display_shows_best_sigma_on_a_terminal():
+    terminal = _Terminal()
     display = ProgressDisplay("ga on B1", budget=100, stream=terminal)
     display.update(40, 55, 23.456, force=True)
     display.finish("stopped (budget)")
     assert "40/100 simulations" in terminal.getvalue() and "23.456 N" in terminal.getvalue()
-    quiet, pipe = Terminal(), io.StringIO()
-    ProgressDisplay("x", 10, quiet=True, stream=quiet).update(1, 1, None, force=True)
-    ProgressDisplay("x", 10, stream=pipe).update(1, 1, None, force=True)
-    assert quiet.getvalue() == pipe.getvalue() == ""
+    assert terminal.getvalue().startswith("\r")
+
+
+def test_progress_display_writes_plain_periodic_lines_to_a_log():
+    log = io.StringIO()
+    display = ProgressDisplay("ga on B1", budget=100, stream=log, interval=0.0)
+    display.update(40, 55, 23.456)
+    display.update(60, 70, 21.0)
+    lines = log.getvalue().splitlines()
+    assert len(lines) == 2 and "\r" not in log.getvalue()
+    assert lines[1].startswith("ga on B1: 60/100 simulations, 70 evaluations, best sigma 21.000 N")
+    assert "s elapsed" in lines[1] and "simulations/s" in lines[1]
+    slow = io.StringIO()
+    ProgressDisplay("x", 10, stream=slow, interval=3600.0).update(1, 1, None)
+    assert slow.getvalue() == ""  # not yet time for a line
+
+
+def test_quiet_silences_the_terminal_line_and_the_log_lines():
+    terminal, log = _Terminal(), io.StringIO()
+    for stream in (terminal, log):
+        display = ProgressDisplay("x", 10, quiet=True, stream=stream, interval=0.0)
+        display.update(1, 1, None, force=True)
+        display.note("resuming")
+        display.finish("stopped")
+    assert terminal.getvalue() == log.getvalue() == ""
+
+
+def test_a_run_logged_to_a_file_prints_progress_lines(tmp_path):
+    command = [
+        sys.executable, "-m", "catenary_env.cli", "optimize", "synthetic-quadratic-slow", "--budget", "60",
+        "--workers", "1", "--store", str(tmp_path / "runs.sqlite"), "--progress-every", "0.05",
+    ]  # fmt: skip
+    log = tmp_path / "log.txt"
+    with log.open("w") as stderr:
+        subprocess.run(command, stdout=subprocess.DEVNULL, stderr=stderr, check=True, timeout=120)
+    lines = log.read_text().splitlines()
+    progress = [line for line in lines if line.startswith("ga on synthetic-quadratic-slow: ")]
+    assert len(progress) >= 3, lines
+    assert any("best sigma" in line and "simulations/s" in line for line in progress)
+    assert "stopped (budget)" in lines[-1]
+    quiet = subprocess.run([*command, "--quiet"], capture_output=True, text=True, check=True, timeout=120)
+    assert quiet.stderr == ""
+
+
+def test_resume_says_what_it_resumed_and_refuses_when_nothing_matches(tmp_path, capsys):
+    from catenary_env.cli import main
+
+    store = str(tmp_path / "runs.sqlite")
+    command = ["optimize", "synthetic-quadratic", "--budget", "20", "--workers", "1", "--store", store]
+    assert main([*command, "--seed", "1", "--quiet"]) == 0
+    capsys.readouterr()
+    assert main([*command, "--seed", "2", "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert "no run to resume" in err and "run 1: ga on synthetic-quadratic" in err and store in err
+    assert main([*command, "--seed", "1", "--resume"]) == 0
+    assert "resuming run 1 of" in capsys.readouterr().err
+    assert main([*command, "--seed", "2", "--resume-or-start", "--quiet"]) == 0
+    assert "run 2 in" in capsys.readouterr().out
 
 
 def test_unknown_problem_lists_the_choices():

@@ -37,7 +37,7 @@ def _command(store: Path, optimizer: str) -> list[str]:
     return [
         sys.executable, "-m", "optimizers", PROBLEM, "--optimizer", optimizer, "--budget", str(BUDGET),
         "--seed", "3", "--fidelity", "test", "--store", str(store), "--workers", "1", "--quiet", "--json",
-        "--resume",
+        "--resume-or-start",
     ]  # fmt: skip
 
 

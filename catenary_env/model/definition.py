@@ -18,6 +18,11 @@ class DefinitionError(ValueError):
     """An invalid catenary or pantograph definition; the message names the field and the allowed range."""
 
 
+MAX_SPAN_LENGTH = 500.0
+"""Longest span accepted, m: far above any overhead line (EN 50119 spans are 30 to 80 m), low enough that a
+mistyped length is named as such rather than as asymmetric droppers."""
+
+
 def _check_positive(where: str, name: str, value: float, allow_zero: bool = False) -> None:
     ok = math.isfinite(value) and (value >= 0.0 if allow_zero else value > 0.0)
     if not ok:
@@ -244,6 +249,11 @@ class CatenaryDefinition:
     def __post_init__(self) -> None:
         where = f"catenary '{self.name}'"
         _check_positive(where, "span_length", self.span_length)
+        if self.span_length > MAX_SPAN_LENGTH:
+            raise DefinitionError(
+                f"{where}.span_length = {self.span_length!r}: must be at most {MAX_SPAN_LENGTH:g} m "
+                "(the spans of overhead lines are 30 to 80 m)"
+            )
         _check_positive(where, "system_height", self.system_height)
         _check_positive(where, "contact_wire_height", self.contact_wire_height)
         _check_positive(where, "contact_stiffness", self.contact_stiffness)

@@ -135,10 +135,16 @@ def check_design(catenary: CatenaryDefinition, design: Design) -> None:
     room = estimated_messenger_height(catenary, x) - (catenary.contact_wire_height + offsets)
     minimum = 0.1
     for i, r in enumerate(room):
+        if r + offsets[i] < minimum:  # even a level contact wire would not leave room for this dropper
+            raise DesignError(
+                f"catenary '{catenary.name}'.system_height = {catenary.system_height!r}: too small for its "
+                f"span and messenger sag: the dropper at {x[i]} m would be shorter than {minimum} m even "
+                "with a level contact wire; raise system_height or the messenger_wire tension"
+            )
         if r < minimum:
             limit = catenary.contact_wire_height + float(room[i] + offsets[i]) - minimum
             raise DesignError(
-                f"design.contact_wire_offsets[{i}] = {offsets[i]!r}: the dropper at {x[i]} m would be "
+                f"design.contact_wire_offsets[{i}] = {float(offsets[i])!r}: the dropper at {x[i]} m would be "
                 f"shorter "
                 f"than {minimum} m (negative length); the contact-wire height there must stay below "
                 f"{limit:.3f} m"
