@@ -29,7 +29,14 @@ from typing import NoReturn
 
 from .cli_errors import EXIT_USAGE, UsageError, check_output_path, interruption, print_error, raise_on_sigterm
 from .model.definition import CatenaryDefinition, DefinitionError
-from .model.design import Design, check_design, check_speed, level_design, presag_design
+from .model.design import (
+    Design,
+    check_design,
+    check_speed,
+    level_design,
+    physical_warnings,
+    presag_design,
+)
 from .model.presets import catenary_names, load_catenary, load_pantograph, pantograph_names, preset_path
 from .pipeline import (
     FIDELITIES,
@@ -274,6 +281,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     check_design(catenary, design)
     check_fidelity(catenary, fidelity)
     uplift = args.uplift
+    for warning in physical_warnings(
+        catenary, speed, uplift if uplift is not None else pantograph.uplift_force
+    ):
+        print(f"catenary simulate: warning: {warning}", file=sys.stderr)
     if uplift is None and pantograph.uplift_force is None:
         target = args.target_mean if args.target_mean is not None else en50367_mean_force(speed)
         print(

@@ -105,3 +105,17 @@ def test_a_command_plugin_that_fails_to_load_says_so_in_one_line(monkeypatch, ca
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "'broken'" in err and "no_such_package" in err
     assert "simulate" in handlers and "optimize" not in handlers  # the simulator's own commands stay
+
+
+@pytest.mark.parametrize(
+    ("argv", "warned"),
+    [
+        (["--speed", "440", "--uplift", "120"], "of the contact wire's wave speed"),
+        (["--speed", "250", "--uplift", "1e6"], "uplift_force = 1e+06 N is outside"),
+    ],
+)
+def test_physically_odd_input_is_warned_about(capsys, argv, warned):
+    status = main(["simulate", "benchmark", *argv, "--fidelity", "test", "--spans", "3", "--json"])
+    err = capsys.readouterr().err
+    assert warned in err and "warning" in err
+    assert status == 0  # a warning, not a refusal

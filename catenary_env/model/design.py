@@ -151,6 +151,44 @@ def check_design(catenary: CatenaryDefinition, design: Design) -> None:
             )
 
 
+WAVE_SPEED_WARNING = 0.9
+"""Fraction of the contact wire's wave speed above which a speed is warned about: the Doppler factor
+(c - v) / (c + v) is below 0.05 there, and contact-force statistics grow without bound as v -> c."""
+
+UPLIFT_PLAUSIBLE = (20.0, 400.0)
+"""Static uplift forces, N, outside which one is warned about: EN 50367 asks mean contact forces of
+70 to about 230 N up to 360 km/h, which a static uplift of a few tens to a few hundred newtons gives."""
+
+
+def physical_warnings(catenary: CatenaryDefinition, speed: float, uplift_force: float | None) -> list[str]:
+    """Warnings for input that is valid but physically odd: speed near the wave speed, odd uplift.
+
+    Parameters
+    ----------
+    catenary : CatenaryDefinition
+        The catenary (its contact wire's wave speed).
+    speed : float
+        Train speed, m/s.
+    uplift_force : float or None
+        Static uplift force, N (None: calibrated, not checked).
+    """
+    warnings = []
+    c = catenary.wave_speed
+    if speed > WAVE_SPEED_WARNING * c:
+        warnings.append(
+            f"speed = {speed * 3.6:.1f} km/h is {speed / c:.3f} of the contact wire's wave speed "
+            f"({c * 3.6:.1f} km/h): above {WAVE_SPEED_WARNING:g} of it the contact force is dominated by "
+            "the wave-speed singularity; raise the contact_wire tension for such speeds"
+        )
+    low, high = UPLIFT_PLAUSIBLE
+    if uplift_force is not None and not low <= uplift_force <= high:
+        warnings.append(
+            f"uplift_force = {uplift_force:g} N is outside the plausible {low:g} to {high:g} N of a "
+            "pantograph's static uplift"
+        )
+    return warnings
+
+
 def check_speed(catenary: CatenaryDefinition, speed: float) -> None:
     """Refuse a train speed (m/s) that is not positive or not below the contact wire's wave speed."""
     c = catenary.wave_speed
