@@ -43,6 +43,31 @@ from numba import njit, uint64
 
 from .active_set import FULL_SWITCH_ITERATIONS, MAX_ACTIVE_SET_ITERATIONS
 
+# Slots of the step coefficients (PassageArrays.coefficients; the span-mode loop's too): the right-hand
+# side's e = E1 u + E2 v + E3 a and y = G1 u + G2 v + G3 a, Newmark's a0..a5, k_h, Rayleigh β, and for the
+# span-mode loop c_m and 1 / c_k.
+(
+    E1,
+    E2,
+    E3,
+    G1,
+    G2,
+    G3,
+    A0,
+    A1,
+    A2,
+    A3,
+    A4,
+    A5,
+    CONTACT_STIFFNESS,
+    RAYLEIGH_BETA,
+    MASS_FACTOR,
+    INVERSE_STIFFNESS_FACTOR,
+) = range(16)
+# Slots of PassageState.flags: in contact (0/1), current contact-wire element (-1: none yet), slack
+# steps, unresolved steps, first and last row of the unit responses.
+CONTACT, ELEMENT, SLACK_STEPS, UNRESOLVED, FIRST_ROW, LAST_ROW = range(6)
+
 WIDTH_STEP = 8  # band widths are padded to a multiple of this: fewer compiled versions
 TRUNCATION = 1e-30  # relative size of a unit response's entries left out (unit_responses)
 
@@ -128,7 +153,8 @@ class PassageState(NamedTuple):
     sweep : ndarray (n + w,)
         The forward sweep's unknowns, in reverse order.
     unit : ndarray (n + w, 4)
-        Unit responses of the current contact-wire element, non-zero in rows flags[4]..flags[5].
+        Unit responses of the current contact-wire element, non-zero in rows flags[FIRST_ROW] to
+        flags[LAST_ROW].
     y_p, yd_p, ydd_p : ndarray (p,)
         Pantograph state.
     slack : ndarray (D,) of bool
@@ -455,8 +481,8 @@ def _settle(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, kapp
 @njit(cache=True, fastmath={"contract"})
 def _advance(u, v, acc, x, y, b, cf):  # pragma: no cover - compiled
     """Newmark update to u₁ = b + y (n,), then x = e1 u + e2 v + e3 a, y = g1 u + g2 v + g3 a."""
-    e1, e2, e3, g1, g2, g3 = cf[0], cf[1], cf[2], cf[3], cf[4], cf[5]
-    a0, a1, a2, a3, a4, a5 = cf[6], cf[7], cf[8], cf[9], cf[10], cf[11]
+    e1, e2, e3, g1, g2, g3 = cf[E1], cf[E2], cf[E3], cf[G1], cf[G2], cf[G3]
+    a0, a1, a2, a3, a4, a5 = cf[A0], cf[A1], cf[A2], cf[A3], cf[A4], cf[A5]
     for i in range(u.size):
         u_new = b[i] + y[i]
         du = u_new - u[i]
@@ -475,7 +501,7 @@ def pantograph_known(d, y_p, yd_p, ydd_p, rhs_p, y_known):  # pragma: no cover -
     + C_p (a1 y + a4 ẏ + a5 ÿ) + uplift. ``d`` holds load_p, pantograph_mass, pantograph_damping,
     pantograph_inverse and the Newmark a0..a5 at coefficients[6:12] (both passages' arrays do)."""
     cf = d.coefficients
-    a0, a1, a2, a3, a4, a5 = cf[6], cf[7], cf[8], cf[9], cf[10], cf[11]
+    a0, a1, a2, a3, a4, a5 = cf[A0], cf[A1], cf[A2], cf[A3], cf[A4], cf[A5]
     n_p = y_p.size
     for i in range(n_p):
         t = d.load_p[i]
@@ -498,7 +524,7 @@ def _known_part(d, k, h, zd, b, y, u, v, acc, y_p, yd_p, ydd_p, rhs_p, y_known, 
     rate_term = β k B (a1 u₀ + a4 v₀ + a5 a₀).
     """  # pragma: no cover - compiled
     cf = d.coefficients
-    a1, a4, a5, beta = cf[7], cf[10], cf[11], cf[13]
+    a1, a4, a5, beta = cf[A1], cf[A4], cf[A5], cf[RAYLEIGH_BETA]
     n_p = y_p.size
     pantograph_known(d, y_p, yd_p, ydd_p, rhs_p, y_known)
     for q in range(dl_known.size):
@@ -522,8 +548,8 @@ def _resume(u, v, acc, x, y, cf, start, element, z_dofs, response_t, Wz):  # pra
     W[zd] of the current element, if any."""
     if start:
         for i in range(u.size):
-            x[i] = cf[0] * u[i] + cf[1] * v[i] + cf[2] * acc[i]
-            y[i] = cf[3] * u[i] + cf[4] * v[i] + cf[5] * acc[i]
+            x[i] = cf[E1] * u[i] + cf[E2] * v[i] + cf[E3] * acc[i]
+            y[i] = cf[G1] * u[i] + cf[G2] * v[i] + cf[G3] * acc[i]
     if element >= 0:
         for i in range(4):
             for q in range(Wz.shape[1]):
@@ -536,7 +562,7 @@ def run_steps(d, s, first, stop, width):  # pragma: no cover - compiled
     n_drop = d.dropper_force.size
     head = d.y_star.size - 1
     cf = d.coefficients
-    a0, a1, a2, a3, a4, a5 = cf[6], cf[7], cf[8], cf[9], cf[10], cf[11]
+    a0, a1, a2, a3, a4, a5 = cf[A0], cf[A1], cf[A2], cf[A3], cf[A4], cf[A5]
     u, v, acc, x, y, b, unit = s.u, s.v, s.a, s.x, s.y, s.work, s.unit
     y_p, yd_p, ydd_p = s.y_p, s.yd_p, s.ydd_p
     Wz = np.zeros((4, n_drop))
@@ -554,19 +580,27 @@ def run_steps(d, s, first, stop, width):  # pragma: no cover - compiled
     lam, idx, elastic = work[2], work[3], work[4]
     y_known = np.zeros(head + 1)
     rhs_p = np.zeros(head + 1)
-    contact = s.flags[0] != 0
-    _resume(u, v, acc, x, y, cf, first == 1, s.flags[1], d.z_dofs, d.dropper_response_t, Wz)
+    contact = s.flags[CONTACT] != 0
+    _resume(u, v, acc, x, y, cf, first == 1, s.flags[ELEMENT], d.z_dofs, d.dropper_response_t, Wz)
 
     for k in range(first, stop):
         symmetric_product(d.m_ptr, d.m_offset, d.m_values, x, b, width)  # u_known = K̂⁻¹ M x + y
         solve(d.upper, d.lower, d.scale, b, s.sweep, width)
         e = d.element[k]
         zd = d.z_dofs[e]
-        if e != s.flags[1]:  # the unit responses of the new contact-wire element, P = K̂⁻¹ E, and W[zd]
-            s.flags[4], s.flags[5] = _element_responses(
-                d.upper, d.scale, unit, s.flags[4], s.flags[5], zd, d.dropper_response_t, Wz, width
+        if e != s.flags[ELEMENT]:  # the unit responses of the new contact-wire element, P = K̂⁻¹ E, and W[zd]
+            s.flags[FIRST_ROW], s.flags[LAST_ROW] = _element_responses(
+                d.upper,
+                d.scale,
+                unit,
+                s.flags[FIRST_ROW],
+                s.flags[LAST_ROW],
+                zd,
+                d.dropper_response_t,
+                Wz,
+                width,
             )
-            s.flags[1] = e
+            s.flags[ELEMENT] = e
         h = d.shape[k]
         c_cc = d.y_star[head]  # the contact point's compliance h P[zd] h, and its coupling g = W[zd]ᵀ h
         for i in range(4):
@@ -585,18 +619,18 @@ def run_steps(d, s, first, stop, width):  # pragma: no cover - compiled
             g_dc,
             dl_known,
             rate_term,
-            cf[12],
+            cf[CONTACT_STIFFNESS],
             d.dropper_kappa,
             d.dropper_force,
             d.dropper_flexibility,
             work,
         )
-        s.flags[3] += 0 if resolved else 1
+        s.flags[UNRESOLVED] += 0 if resolved else 1
 
         # u₁ = u_known + u*_c f + Σ W_d λ_d (with u_known = b + y), over the rows where these
         # responses are not negligible.
         p0, p1, p2, p3 = f * h[0], f * h[1], f * h[2], f * h[3]
-        for i in range(s.flags[4], s.flags[5] + 1):
+        for i in range(s.flags[FIRST_ROW], s.flags[LAST_ROW] + 1):
             b[i] += unit[i, 0] * p0 + unit[i, 1] * p1 + unit[i, 2] * p2 + unit[i, 3] * p3
         for q in range(m):
             for i in range(d.dropper_window[idx[q], 0], d.dropper_window[idx[q], 1] + 1):
@@ -618,5 +652,5 @@ def run_steps(d, s, first, stop, width):  # pragma: no cover - compiled
             force = 0.0 if s.slack[q] else elastic[q]
             s.dropper_min[q] = min(s.dropper_min[q], force)
             s.dropper_max[q] = max(s.dropper_max[q], force)
-        s.flags[2] += 1 if m else 0
-    s.flags[0] = 1 if contact else 0
+        s.flags[SLACK_STEPS] += 1 if m else 0
+    s.flags[CONTACT] = 1 if contact else 0

@@ -21,7 +21,32 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ._kernels import _settle, pantograph_known
+from ._kernels import (
+    A0,
+    A1,
+    A2,
+    A3,
+    A4,
+    A5,
+    CONTACT,
+    CONTACT_STIFFNESS,
+    E1,
+    E2,
+    E3,
+    G1,
+    G2,
+    G3,
+    INVERSE_STIFFNESS_FACTOR,
+    MASS_FACTOR,
+    RAYLEIGH_BETA,
+    SLACK_STEPS,
+    UNRESOLVED,
+    _settle,
+    pantograph_known,
+)
+
+CONFIGURATION = 1
+"""Slot of ReducedState.flags holding the configuration (the others as the exact loop's)."""
 
 FAST = {"contract", "reassoc"}
 """Floating-point licences: fused multiply-adds, and sums in any order so that the dot products
@@ -199,7 +224,7 @@ def _element_rows(d, e, rows_q, rows_c):  # pragma: no cover - compiled
 def _element_responses(d, c, e, rows_q, rows_c, p_b, comp, g_modal, g_full, work_b, tmp):  # pragma: no cover
     """A unit force at each of the element's 4 DOFs: interface response p_b (n_b, 4), compliance
     (4, 4) with the residual, and the droppers' elongations, of the kept modes and with the residual."""
-    c_m = d.coefficients[14]
+    c_m = d.coefficients[MASS_FACTOR]
     s = d.element_span[e]
     t = d.span_type[s]
     m = d.kept[c, s]
@@ -270,16 +295,21 @@ def _configure(d, st, c):  # pragma: no cover - compiled
     _dropper_elongations(d, c, st.u, st.Bu)
     _dropper_elongations(d, c, st.v, st.Bv)
     _dropper_elongations(d, c, st.a, st.Ba)
-    st.flags[1] = c
+    st.flags[CONFIGURATION] = c
 
 
 @njit(cache=True, fastmath=FAST)
 def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C901
     """Steps ``first`` to ``stop - 1`` of the passage, updating ``st`` in place."""
     cf = d.coefficients
-    e1, e2, e3, g1, g2, g3 = cf[0], cf[1], cf[2], cf[3], cf[4], cf[5]
-    a0, a1, a2, a3, a4, a5 = cf[6], cf[7], cf[8], cf[9], cf[10], cf[11]
-    kh, beta, c_m, inv_ck = cf[12], cf[13], cf[14], cf[15]
+    e1, e2, e3, g1, g2, g3 = cf[E1], cf[E2], cf[E3], cf[G1], cf[G2], cf[G3]
+    a0, a1, a2, a3, a4, a5 = cf[A0], cf[A1], cf[A2], cf[A3], cf[A4], cf[A5]
+    kh, beta, c_m, inv_ck = (
+        cf[CONTACT_STIFFNESS],
+        cf[RAYLEIGH_BETA],
+        cf[MASS_FACTOR],
+        cf[INVERSE_STIFFNESS_FACTOR],
+    )
     n_spans = d.span_type.size
     n_b = d.schur_inverse_diagonal.shape[1]
     n_q = d.modal_offset[n_spans]
@@ -316,12 +346,12 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
     y_known = np.zeros(n_p)
     rhs_p = np.zeros(n_p)
     fq = np.zeros(m_max)
-    contact = st.flags[0] != 0
+    contact = st.flags[CONTACT] != 0
     current = -1
 
     for k in range(first, stop):
         c = d.config[k]
-        if c != st.flags[1]:
+        if c != st.flags[CONFIGURATION]:
             _configure(d, st, c)
             current = -1
         el = d.element[k]
@@ -414,7 +444,7 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
             flex,
             work,
         )
-        st.flags[3] += 0 if resolved else 1
+        st.flags[UNRESOLVED] += 0 if resolved else 1
         # 4. Their interface response, then every span's modes with the Newmark update.
         for i in range(n_b):
             x_b[i] += f * (p_b[i, 0] * h[0] + p_b[i, 1] * h[1] + p_b[i, 2] * h[2] + p_b[i, 3] * h[3])
@@ -496,5 +526,5 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
             force = 0.0 if st.slack[q] else elastic[q]
             st.dropper_min[q] = min(st.dropper_min[q], force)
             st.dropper_max[q] = max(st.dropper_max[q], force)
-        st.flags[2] += 1 if n_slack else 0
-    st.flags[0] = 1 if contact else 0
+        st.flags[SLACK_STEPS] += 1 if n_slack else 0
+    st.flags[CONTACT] = 1 if contact else 0

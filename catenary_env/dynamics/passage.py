@@ -396,8 +396,8 @@ def _simulate_compiled(
         state.support_uplift,
         state.dropper_min,
         state.dropper_max,
-        state.flags[2],
-        state.flags[3],
+        state.flags[kernels.SLACK_STEPS],
+        state.flags[kernels.UNRESOLVED],
     )
 
 
