@@ -171,6 +171,12 @@ def physical_warnings(catenary: CatenaryDefinition, speed: float, uplift_force: 
         Train speed, m/s.
     uplift_force : float or None
         Static uplift force, N (None: calibrated, not checked).
+
+    Examples
+    --------
+    >>> from catenary_env.model.presets import load_catenary
+    >>> physical_warnings(load_catenary("benchmark"), 300 / 3.6, 120.0)
+    []
     """
     warnings = []
     c = catenary.wave_speed
@@ -181,7 +187,8 @@ def physical_warnings(catenary: CatenaryDefinition, speed: float, uplift_force: 
             "the wave-speed singularity; raise the contact_wire tension for such speeds"
         )
     low, high = UPLIFT_PLAUSIBLE
-    if uplift_force is not None and not low <= uplift_force <= high:
+    # A force that is not positive is refused as an error where it is used: no warning before that.
+    if uplift_force is not None and uplift_force > 0.0 and not low <= uplift_force <= high:
         warnings.append(
             f"uplift_force = {uplift_force:g} N is outside the plausible {low:g} to {high:g} N of a "
             "pantograph's static uplift"
