@@ -71,6 +71,7 @@ class ReducedArrays(NamedTuple):
     weight: np.ndarray  # (T, m) 1 - c_m / D
     shapes: np.ndarray  # (T, n_i, m) Φ
     constraint: np.ndarray  # (T, n_i, n_c) Ψ
+    schur_band: np.ndarray  # (C, w + 1, n_b) U in LAPACK band storage (the numpy loop's)
     schur_columns: np.ndarray  # (C, n_b, w) the Cholesky factor U of S by columns (_band_solve)
     schur_rows: np.ndarray  # (C, n_b, w) U by rows
     schur_inverse_diagonal: np.ndarray  # (C, n_b)

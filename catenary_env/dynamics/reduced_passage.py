@@ -43,32 +43,16 @@ from .span_modes import ReducedSystem, band_storage, upper_band
 
 
 def band_rows(ab: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """An upper band factor (LAPACK storage, (w + 1, n)) as its columns above the diagonal (n, w),
+    """An upper band factor U (LAPACK storage, (w + 1, n)) as its columns above the diagonal (n, w),
     its rows right of the diagonal (n, w) and its reciprocal diagonal (n,): the compiled loop reads
-    each contiguously."""
+    each contiguously (see ``_reduced_kernels._band_solve``)."""
     w = ab.shape[0] - 1
     n = ab.shape[1]
-    columns = np.zeros((n, w))
-    rows = np.zeros((n, w))
-    for j in range(n):
-        for i in range(max(0, j - w), j):
-            columns[j, w - j + i] = ab[w + i - j, j]
-            rows[i, j - i - 1] = ab[w + i - j, j]
+    columns = np.ascontiguousarray(ab[:w].T)  # columns[j, w - k] = U[j - k, j]
+    rows = np.zeros((n, w))  # rows[i, k - 1] = U[i, i + k]
+    for k in range(1, w + 1):
+        rows[: n - k, k - 1] = ab[w - k, k:]
     return columns, rows, 1.0 / ab[w]
-
-
-def _band_factor_solve(
-    columns: np.ndarray, rows: np.ndarray, inverse: np.ndarray, b: np.ndarray
-) -> np.ndarray:
-    """(Uᵀ U)⁻¹ b from :func:`band_rows`' form (b may have several columns)."""
-    w = columns.shape[1]
-    n = inverse.size
-    ab = np.zeros((w + 1, n))
-    ab[w] = 1.0 / inverse
-    for j in range(n):
-        for i in range(max(0, j - w), j):
-            ab[w + i - j, j] = columns[j, w - j + i]
-    return sla.cho_solve_banded((ab, False), b, check_finite=False)
 
 
 def _band(matrix: np.ndarray) -> int:
@@ -266,6 +250,7 @@ def _configurations(
         _band(reduced.interface_stiffness),
     )
     out = dict(
+        schur_band=np.zeros((n_spans, width + 1, n_b)),
         schur_columns=np.zeros((n_spans, n_b, width)),
         schur_rows=np.zeros((n_spans, n_b, width)),
         schur_inverse_diagonal=np.zeros((n_spans, n_b)),
@@ -294,6 +279,7 @@ def _configurations(
             sum_coupling[np.ix_(c, c)] += span_sum[s, kept[p, s]]
         schur = c_k * reduced.interface_stiffness + c_m * reduced.interface_mass - c_m**2 * sum_coupling
         factor = sla.cholesky_banded(band_storage(0.5 * (schur + schur.T), width), check_finite=False)
+        out["schur_band"][p] = factor
         out["schur_columns"][p], out["schur_rows"][p], out["schur_inverse_diagonal"][p] = band_rows(factor)
         Y = reduced.interface_mass - c_m * sum_coupling
         for k in range(-width, width + 1):
@@ -519,7 +505,7 @@ def simulate_reduced_passage(
 
 
 def _schur_solve(d: _Arrays, c: int, b: np.ndarray) -> np.ndarray:
-    return _band_factor_solve(d.schur_columns[c], d.schur_rows[c], d.schur_inverse_diagonal[c], b)
+    return sla.cho_solve_banded((d.schur_band[c], False), b, check_finite=False)
 
 
 def _element_rows(d: _Arrays, e: int) -> tuple[np.ndarray, np.ndarray]:
