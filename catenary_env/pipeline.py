@@ -63,6 +63,8 @@ NEAR_CUTOFF = 500.0
 """Hz: modes kept near the pantograph (the convergence study, docs/performance.md)."""
 FAR_CUTOFF = 50.0
 """Hz: modes kept in the spans away from the pantograph."""
+NEAR_SPANS = 2
+"""Spans on each side of the pantograph's that keep the near cut-off (the convergence study)."""
 DYNAMICS = ("span-modes", "exact")
 
 
@@ -100,7 +102,7 @@ class Fidelity:
     dynamics: str = "span-modes"
     near_cutoff: float = NEAR_CUTOFF
     far_cutoff: float = FAR_CUTOFF
-    near_spans: int = 1
+    near_spans: int = NEAR_SPANS
 
 
 FIDELITIES: dict[str, Fidelity] = {

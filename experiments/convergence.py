@@ -43,6 +43,7 @@ def main(config: Config) -> Path:
             contact_wire_element=element,
             messenger_wire_element=2 * element,
             time_step=dt,
+            dynamics="exact",  # the discretisation of the reference model
         )
         start = time.perf_counter()
         sim = simulate(

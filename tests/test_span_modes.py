@@ -35,7 +35,7 @@ def exact(system, benchmark_pantograph_definition):
 
 @pytest.fixture(scope="module")
 def full_basis(system):
-    return prepare_reduced_passage(reduce_system(system, np.inf), DT)
+    return prepare_reduced_passage(reduce_system(system, np.inf), DT, near_spans=1)
 
 
 def test_interior_spans_share_one_eigensolution(system):
@@ -85,7 +85,7 @@ def test_the_reduced_model_approaches_the_exact_one_as_the_cutoff_rises(
     window = slice(exact.time.size // 3, 2 * exact.time.size // 3)
     errors = []
     for cutoff in (100.0, 200.0, 400.0):
-        prepared = prepare_reduced_passage(reduce_system(system, cutoff), DT)
+        prepared = prepare_reduced_passage(reduce_system(system, cutoff), DT, near_spans=1)
         reduced = simulate_reduced_passage(
             prepared, benchmark_pantograph_definition, 190.0, SPEED, backend="numpy"
         )
@@ -97,7 +97,7 @@ def test_the_reduced_model_approaches_the_exact_one_as_the_cutoff_rises(
 
 def test_compiled_loop_equals_the_numpy_loop(system, benchmark_pantograph_definition):
     pytest.importorskip("numba")
-    prepared = prepare_reduced_passage(reduce_system(system, 300.0, 50.0), DT)
+    prepared = prepare_reduced_passage(reduce_system(system, 300.0, 50.0), DT, near_spans=1)
     a = simulate_reduced_passage(prepared, benchmark_pantograph_definition, 190.0, SPEED, backend="numpy")
     b = simulate_reduced_passage(prepared, benchmark_pantograph_definition, 190.0, SPEED, backend="numba")
     assert np.abs(a.contact_force - b.contact_force).max() < 1e-7

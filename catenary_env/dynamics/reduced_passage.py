@@ -12,7 +12,7 @@ A step costs dense products with the spans' mode-interface couplings instead of 
 the whole section's banded factor.
 
 Near field and far field. High-frequency motion is excited by the contact and the droppers near the
-pantograph and dies out within metres (Rayleigh damping βω/2 grows with frequency), so the spans
+pantograph and dies out over a few spans (Rayleigh damping βω/2 grows with frequency), so the spans
 within ``near_spans`` of the pantograph keep their modes up to the near cut-off and the others only
 those below the far cut-off. The model therefore changes, by a span's high modes, when the pantograph
 crosses a support: a *configuration* per span the pantograph is in, each a proper Galerkin reduction
@@ -81,7 +81,7 @@ class PreparedReducedPassage:
 
 
 def prepare_reduced_passage(
-    reduced: ReducedSystem, time_step: float, near_spans: int = 1
+    reduced: ReducedSystem, time_step: float, near_spans: int
 ) -> PreparedReducedPassage:
     """The Schur complements, dropper responses and residual compliances of every configuration."""
     system = reduced.system
