@@ -39,7 +39,7 @@ from ..model.definition import PantographDefinition
 from .active_set import settle
 from .newmark import NewmarkConstants, Trajectory
 from .passage import _Passage, _start_passage, _trajectory
-from .span_modes import ReducedSystem, band_storage, upper_band
+from .span_modes import ReducedSystem, band_storage, band_width, upper_band
 
 
 def band_rows(ab: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -53,11 +53,6 @@ def band_rows(ab: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     for k in range(1, w + 1):
         rows[: n - k, k - 1] = ab[w - k, k:]
     return columns, rows, 1.0 / ab[w]
-
-
-def _band(matrix: np.ndarray) -> int:
-    rows, cols = np.nonzero(matrix)
-    return int(np.max(np.abs(rows - cols), initial=0))
 
 
 @dataclass(frozen=True)
@@ -246,8 +241,8 @@ def _configurations(
     inv_d, coupling = modes["inverse_diagonal"], modes["coupling"]
     width = max(
         max((int(np.ptp(c)) for c in reduced.coupled if c.size), default=0),
-        _band(reduced.interface_mass),
-        _band(reduced.interface_stiffness),
+        band_width(reduced.interface_mass),
+        band_width(reduced.interface_stiffness),
     )
     out = dict(
         schur_band=np.zeros((n_spans, width + 1, n_b)),

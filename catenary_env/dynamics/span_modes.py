@@ -171,11 +171,15 @@ def split_spans(system: LinearSystem) -> tuple[tuple[np.ndarray, ...], np.ndarra
     return internal, b, coupled
 
 
+def band_width(matrix: np.ndarray) -> int:
+    """The largest distance of a non-zero entry from the diagonal."""
+    rows, cols = np.nonzero(matrix)
+    return int(np.max(np.abs(rows - cols), initial=0))
+
+
 def band_storage(matrix: np.ndarray, width: int | None = None) -> np.ndarray:
     """The upper band of a symmetric matrix in LAPACK storage, (width + 1, n); width: its own by default."""
-    if width is None:
-        rows, cols = np.nonzero(matrix)
-        width = int(np.max(np.abs(rows - cols), initial=0))
+    width = band_width(matrix) if width is None else width
     ab = np.zeros((width + 1, matrix.shape[0]))
     for k in range(width + 1):
         ab[width - k, k:] = np.diagonal(matrix, k)
