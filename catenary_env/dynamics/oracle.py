@@ -17,6 +17,7 @@ import scipy.sparse.linalg as spla
 
 from ..model.definition import PantographDefinition
 from .active_set import MAX_ACTIVE_SET_ITERATIONS, switch_states
+from .history import PassageHistory
 from .linear_system import LinearSystem
 from .newmark import NewmarkConstants, Trajectory, passage_positions
 from .pantograph import pantograph_matrices, static_contact
@@ -63,15 +64,8 @@ def simulate_passage_reference(
     A = np.r_[spla.spsolve(M.tocsc(), N_row0[:n] * f0), np.zeros(n_p)]
 
     steps = time.size
-    force = np.zeros(steps)
-    force[0] = f0
-    head_h = np.zeros(steps)
-    head_h[0] = y[head]
-    uplift = np.zeros(steps)
-    supports = np.zeros((steps, system.support_z.size))
-    d_min, d_max = N0.copy(), N0.copy()
+    history = PassageHistory(steps, system.support_z.size, N0, f0, y[head])
     contact, slack = f0 > 0.0, np.zeros(N0.size, dtype=bool)
-    slack_steps = unresolved = 0
     for k in range(1, steps):
         rhs = M_all @ (nm.a0 * U + nm.a2 * V + nm.a3 * A) + C_all @ (nm.a1 * U + nm.a4 * V + nm.a5 * A)
         rhs[n] += uplift_force
@@ -80,6 +74,7 @@ def simulate_passage_reference(
         N_row[system.contact_wire.z_dofs[element[k]]] = shape[k]
         N_row[n + head] = -1.0  # N_row · U = wire uplift - head height
         velocity_part = B @ (nm.a1 * U[:n] + nm.a4 * V[:n] + nm.a5 * A[:n])
+        resolved = False
         for iteration in range(MAX_ACTIVE_SET_ITERATIONS):
             matrix = base.copy()
             r = rhs.copy()
@@ -99,32 +94,22 @@ def simulate_passage_reference(
             elastic = N0 + rate * ((1.0 + beta * nm.a1) * elongation - beta * velocity_part)
             new_contact, new_slack = bool(gap > 0.0), elastic < 0.0
             if new_contact == contact and np.array_equal(new_slack, slack):
+                resolved = True
                 break
             contact, slack = switch_states(
                 contact, slack, new_contact, new_slack, kh * gap, elastic, iteration
             )
-        else:
-            unresolved += 1
         V, A = nm.update(U, V, A, U_new)
         U = U_new
-        force[k] = kh * gap if contact else 0.0
-        head_h[k] = U[n + head]
-        uplift[k] = shape[k] @ U[system.contact_wire.z_dofs[element[k]]]
-        supports[k] = U[system.support_z]
-        dropper = np.where(slack, 0.0, elastic)
-        np.minimum(d_min, dropper, out=d_min)
-        np.maximum(d_max, dropper, out=d_max)
-        slack_steps += bool(np.any(slack))
-    return Trajectory(
-        time,
-        position,
-        force,
-        head_h,
-        uplift,
-        lay.support_x.copy(),
-        supports,
-        d_min,
-        d_max,
-        slack_steps,
-        unresolved,
-    )
+        history.record(
+            k,
+            kh * gap if contact else 0.0,
+            U[n + head],
+            shape[k] @ U[system.contact_wire.z_dofs[element[k]]],
+            U[system.support_z],
+            elastic,
+            slack,
+            bool(np.any(slack)),
+            resolved,
+        )
+    return history.trajectory(time, position, lay.support_x)

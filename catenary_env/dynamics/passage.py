@@ -19,9 +19,13 @@ would be compressive: judging by the spring force alone while removing the dampi
 leaves droppers near zero force with no consistent state, whereas this rule makes each step a
 linear complementarity problem with a unique solution.
 
-The time loop has two backends with the same arithmetic (docs/performance.md, 'Benchmark'): numpy, the
-reference, and one compiled by numba (:mod:`catenary_env.dynamics._kernels`, optional), which
-:func:`simulate_passage` takes when numba is installed. Their contact forces agree to about 1e-9 N.
+The time loop has two backends with the same steps and arithmetic (:data:`BACKENDS`; docs/performance.md,
+'Benchmark'): numpy, the reference, cut into the compiled loop's functions, and one compiled by numba
+(:mod:`catenary_env.dynamics._kernels`, optional), which :func:`simulate_passage` takes when numba is
+installed. Their contact forces agree to about 1e-9 N. Both follow the active-set rules of
+:mod:`~catenary_env.dynamics.active_set` and record through
+:class:`~catenary_env.dynamics.history.PassageHistory`; the span-mode model
+(:mod:`~catenary_env.dynamics.reduced_passage`) plugs in beside them.
 """
 
 from __future__ import annotations
@@ -39,6 +43,7 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ..model.definition import PantographDefinition
 from .active_set import settle
+from .history import PassageHistory
 from .linear_system import LinearSystem
 from .newmark import NewmarkConstants, Trajectory, passage_positions
 from .pantograph import PantographMatrices, pantograph_matrices, static_contact
@@ -109,9 +114,6 @@ def prepare_passage(system: LinearSystem, time_step: float) -> PreparedPassage:
     B = system.dropper_elongation
     W = factor.solve(B.T.toarray())
     return PreparedPassage(system, nm, factor, W, np.asarray(B @ W))
-
-
-BACKENDS = ("auto", "numpy", "numba")
 
 
 def _compiled_kernels() -> ModuleType | None:
@@ -217,8 +219,8 @@ def simulate_passage(
     >>> bool(passage.contact_force.max() > 150.0)
     True
     """
-    if backend not in BACKENDS:
-        raise ValueError(f"backend = {backend!r}: one of {', '.join(BACKENDS)}")
+    if backend not in ("auto", *BACKENDS):
+        raise ValueError(f"backend = {backend!r}: one of auto, {', '.join(BACKENDS)}")
     if backend == "auto":
         backend = "numba" if _compiled_kernels() is not None else "numpy"
     if prepared is None:
@@ -226,45 +228,30 @@ def simulate_passage(
     if prepared.system is not system or prepared.constants.dt != time_step:
         raise ValueError("prepared: computed for another system or time step")
     passage = _start_passage(system, pantograph, uplift_force, speed, prepared.constants, n_steps)
-    if backend == "numba":
-        return _simulate_compiled(prepared, passage, progress)
-    return _simulate_numpy(prepared, passage, progress)
+    return BACKENDS[backend](prepared, passage, progress)
 
 
 def _simulate_numpy(
     prepared: PreparedPassage, passage: _Passage, progress: Callable[[float], None] | None
 ) -> Trajectory:
-    """The time loop in numpy: the reference implementation of the fast method."""
+    """The time loop in numpy: the reference implementation of the fast method, in the compiled loop's
+    steps (:func:`catenary_env.dynamics._kernels.run_steps`)."""
     system = prepared.system
     nm = prepared.constants
     M, K = system.mass, system.stiffness
     alpha, beta = system.alpha, system.beta
-    factor, W, G = prepared.factor, prepared.dropper_response, prepared.dropper_flexibility
-    B = system.dropper_elongation
-    rate, N0 = system.dropper_rate, system.dropper_force
-    kappa = rate * (1.0 + beta * nm.a1)
+    W, G = prepared.dropper_response, prepared.dropper_flexibility
+    N0 = system.dropper_force
+    kappa = system.dropper_rate * (1.0 + beta * nm.a1)
     kh = system.static.layout.catenary.contact_stiffness
-    pm, Kp_inv, y_star = passage.pantograph, passage.pantograph_inverse, passage.y_star
-    load_p = passage.load_p
-    head = pm.head
-    element, shape, wire_z = passage.element, passage.shape, passage.wire_z
+    y_star, head = passage.y_star, passage.pantograph.head
     n_steps = passage.time.size
 
-    n = system.n_dofs
-    u, v, a = np.zeros(n), np.zeros(n), passage.acceleration0
+    u, v, a = np.zeros(system.n_dofs), np.zeros(system.n_dofs), passage.acceleration0
     y, yd, ydd = passage.y0, np.zeros(head + 1), np.zeros(head + 1)
-    f0 = passage.force0
-    force = np.zeros(n_steps)
-    force[0] = f0
-    head_h = np.zeros(n_steps)
-    head_h[0] = y[head]
-    uplift = np.zeros(n_steps)
-    supports = np.zeros((n_steps, system.support_z.size))
-    d_min = N0.copy()
-    d_max = N0.copy()
-    contact = f0 > 0.0
+    history = PassageHistory(n_steps, system.support_z.size, N0, passage.force0, y[head])
+    contact = passage.force0 > 0.0
     slack = np.zeros(N0.size, dtype=bool)
-    slack_steps = unresolved = 0
     current_element = -1
     c1, c2, c3 = nm.a0 + alpha * nm.a1, nm.a2 + alpha * nm.a4, nm.a3 + alpha * nm.a5
     d1, d2, d3 = beta * nm.a1, beta * nm.a4, beta * nm.a5
@@ -273,79 +260,69 @@ def _simulate_numpy(
     for k in range(1, n_steps):
         if progress is not None and k % report_every == 0:
             progress(k / n_steps)
-        rhs = M @ (c1 * u + c2 * v + c3 * a) + K @ (d1 * u + d2 * v + d3 * a)
-        u_known = factor.solve(rhs)
-        e = element[k]
-        if e != current_element:
-            zd = system.contact_wire.z_dofs[e]
-            unit = np.zeros((n, 4))
-            unit[zd, np.arange(4)] = 1.0
-            P = factor.solve(unit)
-            Pzz, Wz = P[zd], W[zd]
-            current_element = e
-        h = shape[k]
-        u_c = P @ h
-        g_dc = Wz.T @ h
+        u_known = prepared.factor.solve(M @ (c1 * u + c2 * v + c3 * a) + K @ (d1 * u + d2 * v + d3 * a))
+        if passage.element[k] != current_element:
+            current_element = passage.element[k]
+            zd, P, Pzz, Wz = _element_responses(prepared, current_element)
+        h = passage.shape[k]
         c_cc = h @ Pzz @ h + y_star[head]
-        rhs_p = pm.mass @ (nm.a0 * y + nm.a2 * yd + nm.a3 * ydd) + pm.damping @ (
-            nm.a1 * y + nm.a4 * yd + nm.a5 * ydd
+        g_dc = Wz.T @ h
+        y_known, gap_known, dl_known, rate_term = _known_part(
+            prepared, passage, k, h, zd, u_known, u, v, a, y, yd, ydd
         )
-        y_known = Kp_inv @ (rhs_p + load_p)
-        gap_known = y_known[head] - wire_z[k] - h @ u_known[zd]
-        dl_known = B @ u_known
-        rate_term = beta * rate * (B @ (nm.a1 * u + nm.a4 * v + nm.a5 * a))
-
         step = settle(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, kappa, N0, G)
         contact, slack, f, idx, lam, elastic = step[:6]
-        m = idx.size
-        unresolved += 0 if step.resolved else 1
-
-        u_new = u_known + u_c * f + W[:, idx] @ lam
+        u_new = u_known + (P @ h) * f + W[:, idx] @ lam
         y_new = y_known - f * y_star
         v, a = nm.update(u, v, a, u_new)
         yd, ydd = nm.update(y, yd, ydd, y_new)
         u, y = u_new, y_new
-        force[k] = f
-        head_h[k] = y[head]
-        uplift[k] = h @ u[zd]
-        supports[k] = u[system.support_z]
-        dropper = np.where(slack, 0.0, elastic)
-        np.minimum(d_min, dropper, out=d_min)
-        np.maximum(d_max, dropper, out=d_max)
-        slack_steps += bool(m)
+        history.record(
+            k, f, y[head], h @ u[zd], u[system.support_z], elastic, slack, idx.size > 0, step.resolved
+        )
 
     if progress is not None:
         progress(1.0)
-    return _trajectory(
-        system, passage, force, head_h, uplift, supports, d_min, d_max, slack_steps, unresolved
-    )
+    return history.trajectory(passage.time, passage.position, system.static.layout.support_x)
 
 
-def _trajectory(
-    system: LinearSystem,
+def _element_responses(
+    prepared: PreparedPassage, element: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The contact-wire element's z DOFs, the unit responses P = K̂⁻¹ E to forces there, P[zd] and W[zd]."""
+    system = prepared.system
+    zd = system.contact_wire.z_dofs[element]
+    unit = np.zeros((system.n_dofs, 4))
+    unit[zd, np.arange(4)] = 1.0
+    P = prepared.factor.solve(unit)
+    return zd, P, P[zd], prepared.dropper_response[zd]
+
+
+def _known_part(
+    prepared: PreparedPassage,
     passage: _Passage,
-    force: np.ndarray,
-    head_height: np.ndarray,
-    uplift: np.ndarray,
-    supports: np.ndarray,
-    d_min: np.ndarray,
-    d_max: np.ndarray,
-    slack_steps: int,
-    unresolved: int,
-) -> Trajectory:
-    return Trajectory(
-        time=passage.time,
-        position=passage.position,
-        contact_force=force,
-        head_height=head_height,
-        wire_uplift=uplift,
-        support_x=system.static.layout.support_x.copy(),
-        support_uplift=supports,
-        dropper_force_min=d_min,
-        dropper_force_max=d_max,
-        slack_steps=int(slack_steps),
-        unresolved_steps=int(unresolved),
+    k: int,
+    h: np.ndarray,
+    zd: np.ndarray,
+    u_known: np.ndarray,
+    u: np.ndarray,
+    v: np.ndarray,
+    a: np.ndarray,
+    y: np.ndarray,
+    yd: np.ndarray,
+    ydd: np.ndarray,
+) -> tuple[np.ndarray, float, np.ndarray, np.ndarray]:
+    """The pantograph without contact (y_known), the contact gap without contact force (m), the dropper
+    elongations B u_known (m) and damping shares β k B (a1 u₀ + a4 v₀ + a5 a₀) (N)."""
+    system, nm, pm = prepared.system, prepared.constants, passage.pantograph
+    B = system.dropper_elongation
+    rhs_p = pm.mass @ (nm.a0 * y + nm.a2 * yd + nm.a3 * ydd) + pm.damping @ (
+        nm.a1 * y + nm.a4 * yd + nm.a5 * ydd
     )
+    y_known = passage.pantograph_inverse @ (rhs_p + passage.load_p)
+    gap_known = y_known[pm.head] - passage.wire_z[k] - h @ u_known[zd]
+    rate_term = system.beta * system.dropper_rate * (B @ (nm.a1 * u + nm.a4 * v + nm.a5 * a))
+    return y_known, float(gap_known), B @ u_known, rate_term
 
 
 def _simulate_compiled(
@@ -387,18 +364,14 @@ def _simulate_compiled(
         kernels.run_steps(data, state, int(first), int(stop), width)
         if progress is not None:
             progress(stop / n_steps)
-    return _trajectory(
-        system,
-        passage,
-        state.force,
-        state.head_height,
-        state.wire_uplift,
-        state.support_uplift,
-        state.dropper_min,
-        state.dropper_max,
-        state.flags[kernels.SLACK_STEPS],
-        state.flags[kernels.UNRESOLVED],
+    history = PassageHistory.from_arrays(
+        state, state.flags[kernels.SLACK_STEPS], state.flags[kernels.UNRESOLVED]
     )
+    return history.trajectory(passage.time, passage.position, system.static.layout.support_x)
+
+
+BACKENDS = {"numpy": _simulate_numpy, "numba": _simulate_compiled}
+"""The exact passage's time loops by name; ``"auto"`` takes numba where it is installed."""
 
 
 def _kernel_arrays(

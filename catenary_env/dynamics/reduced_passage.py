@@ -37,8 +37,9 @@ import scipy.linalg as sla
 
 from ..model.definition import PantographDefinition
 from .active_set import settle
+from .history import PassageHistory
 from .newmark import NewmarkConstants, Trajectory
-from .passage import _Passage, _start_passage, _trajectory
+from .passage import _Passage, _start_passage
 from .span_modes import ReducedSystem, band_storage, band_width, upper_band
 
 
@@ -429,12 +430,9 @@ def simulate_reduced_passage(
     red = prepared.reduced
     system = red.system
     if backend == "auto":
-        try:
-            from . import _reduced_kernels  # noqa: F401
-        except ImportError:
-            backend = "numpy"
-        else:
-            backend = "numba"
+        backend = "numba" if _compiled_loop() is not None else "numpy"
+    if backend not in BACKENDS:
+        raise ValueError(f"backend = {backend!r}: one of auto, {', '.join(BACKENDS)}")
     passage = _start_passage(system, pantograph, uplift_force, speed, prepared.constants, n_steps)
     fields = _passage_arrays(prepared, passage)
     n = red.n_dofs
@@ -469,34 +467,33 @@ def simulate_reduced_passage(
     )
     state["force"][0] = passage.force0
     state["head_height"][0] = passage.y0[head]
-    if backend == "numba":
-        from . import _reduced_kernels as kernels
+    BACKENDS[backend](fields, state, progress)
+    history = PassageHistory.from_arrays(_Arrays(state), state["flags"][2], state["flags"][3])
+    return history.trajectory(passage.time, passage.position, system.static.layout.support_x)
 
-        data = kernels.ReducedArrays(**fields)
-        st = kernels.ReducedState(**state)
-        bounds = np.unique(np.linspace(1, n_steps, 101 if progress is not None else 2).round().astype(int))
-        for first, stop in zip(bounds[:-1], bounds[1:], strict=True):
-            kernels.run_reduced(data, st, int(first), int(stop))
-            if progress is not None:
-                progress(stop / n_steps)
-    elif backend == "numpy":
-        st = _Arrays(state)
-        _run_numpy(_Arrays(fields), st, progress)
-    else:
-        raise ValueError(f"backend = {backend!r}: one of auto, numpy, numba")
-    st = state
-    return _trajectory(
-        system,
-        passage,
-        st["force"],
-        st["head_height"],
-        st["wire_uplift"],
-        st["support_uplift"],
-        st["dropper_min"],
-        st["dropper_max"],
-        st["flags"][2],
-        st["flags"][3],
-    )
+
+def _compiled_loop():  # noqa: ANN202
+    """:mod:`catenary_env.dynamics._reduced_kernels`, or None where numba is not installed."""
+    try:
+        from . import _reduced_kernels
+    except ImportError:
+        return None
+    return _reduced_kernels
+
+
+def _run_compiled(fields: dict, state: dict, progress: Callable[[float], None] | None) -> None:
+    """The compiled loop (:mod:`catenary_env.dynamics._reduced_kernels`), in chunks for ``progress``."""
+    kernels = _compiled_loop()
+    if kernels is None:
+        raise ImportError("backend='numba' needs numba: pip install numba")
+    data = kernels.ReducedArrays(**fields)
+    st = kernels.ReducedState(**state)
+    n_steps = data.element.size
+    bounds = np.unique(np.linspace(1, n_steps, 101 if progress is not None else 2).round().astype(int))
+    for first, stop in zip(bounds[:-1], bounds[1:], strict=True):
+        kernels.run_reduced(data, st, int(first), int(stop))
+        if progress is not None:
+            progress(stop / n_steps)
 
 
 def _schur_solve(d: _Arrays, c: int, b: np.ndarray) -> np.ndarray:
@@ -577,6 +574,7 @@ def _run_numpy(d: _Arrays, st: _Arrays, progress: Callable[[float], None] | None
     current = -1
     report_every = max(1, n_steps // 100)
     u, v, acc_s, e_vec, y = st.u, st.v, st.a, st.e, st.y
+    history = PassageHistory.from_arrays(st, 0, 0)
     spans = [
         (s, d.span_type[s], d.modal_offset[s], d.coupled[s, : d.n_coupled[d.span_type[s]]])
         for s in range(n_spans)
@@ -646,7 +644,6 @@ def _run_numpy(d: _Arrays, st: _Arrays, progress: Callable[[float], None] | None
         # 3. Contact force and slack droppers (the exact passage's active set).
         step = settle(contact, st.slack.copy(), gap_known, c_cc, g_dc, dl_known, rate_term, kh, kappa, N0, G)
         contact, st.slack[:], f, idx, lam, elastic = step[:6]
-        st.flags[3] += 0 if step.resolved else 1
         # 4. The response on the interface, then every span's modes with the Newmark update.
         x_b = x_b + f * (p_b @ h) + lam @ d.dropper_interface[c, idx]
         for s, t, off, cpl in spans:
@@ -673,17 +670,22 @@ def _run_numpy(d: _Arrays, st: _Arrays, progress: Callable[[float], None] | None
         st.yd_p[:] = a1 * du - a4 * st.yd_p - a5 * st.ydd_p
         st.ydd_p[:] = acc_p
         st.y_p[:] += du
-        st.force[k] = f
-        st.head_height[k] = st.y_p[head]
         s, t, off, cpl = spans[s_el]
         m = kept[s_el]
-        st.wire_uplift[k] = h @ (rows_q[:, :m] @ u[off : off + m] + rows_c[:, : cpl.size] @ u[n_q + cpl])
-        st.support_uplift[k] = u[n_q + d.support]
-        dropper = np.where(st.slack, 0.0, elastic)
-        np.minimum(st.dropper_min, dropper, out=st.dropper_min)
-        np.maximum(st.dropper_max, dropper, out=st.dropper_max)
-        st.flags[2] += 1 if idx.size else 0
+        uplift = h @ (rows_q[:, :m] @ u[off : off + m] + rows_c[:, : cpl.size] @ u[n_q + cpl])
+        history.record(
+            k, f, st.y_p[head], uplift, u[n_q + d.support], elastic, st.slack, idx.size > 0, step.resolved
+        )
+    st.flags[2], st.flags[3] = history.slack_steps, history.unresolved_steps
     st.flags[0] = int(contact)
+
+
+def _run_reference(fields: dict, state: dict, progress: Callable[[float], None] | None) -> None:
+    _run_numpy(_Arrays(fields), _Arrays(state), progress)
+
+
+BACKENDS = {"numpy": _run_reference, "numba": _run_compiled}
+"""The span-mode passage's time loops by name; ``"auto"`` takes numba where it is installed."""
 
 
 def _newmark(u, v, acc, e_vec, y, p, u_new, cf) -> None:
