@@ -42,6 +42,7 @@ from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 import numpy as np  # noqa: E402
 
 from catenary_env.analysis.statistics import passage_statistics  # noqa: E402
+from catenary_env.dynamics import kernel_preparation as preparation  # noqa: E402
 from catenary_env.dynamics.linear_system import linearise  # noqa: E402
 from catenary_env.dynamics.passage import prepare_passage, simulate_passage  # noqa: E402
 from catenary_env.dynamics.reduced_passage import simulate_reduced_passage  # noqa: E402
@@ -157,8 +158,8 @@ def solve_floor(preset: str, n_spans: int, fidelity: Fidelity, calls: int = 200)
         return None
     system = linearise(find_shape(level_layout(load_catenary(preset), n_spans, fidelity)))
     factor = prepare_passage(system, fidelity.time_step).factor
-    w = kernels.padded_width(factor.bandwidth)
-    unit = kernels.unit_factor(factor.factor, w)
+    w = preparation.padded_width(factor.bandwidth)
+    unit = preparation.unit_factor(factor.factor, w)
     n = factor.factor.shape[1]
     b, sweep = np.zeros(n + w), np.zeros(n + w)
     b[:n] = np.random.default_rng(0).standard_normal(n)

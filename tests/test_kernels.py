@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
+from catenary_env.dynamics import kernel_preparation as preparation
 from catenary_env.dynamics import passage
 from catenary_env.dynamics.linear_system import linearise
 from catenary_env.dynamics.passage import prepare_passage, simulate_passage
@@ -107,8 +108,8 @@ def test_banded_solve_and_mass_product_equal_scipy(kernels, en50318):
     system, _ = en50318
     prepared = prepare_passage(system, 2e-3)
     factor = prepared.factor
-    w = kernels.padded_width(factor.bandwidth)
-    unit = kernels.unit_factor(factor.factor, w)
+    w = preparation.padded_width(factor.bandwidth)
+    unit = preparation.unit_factor(factor.factor, w)
     rng = np.random.default_rng(1)
     n = system.n_dofs
     rhs = rng.standard_normal(n)
@@ -121,7 +122,7 @@ def test_banded_solve_and_mass_product_equal_scipy(kernels, en50318):
 
     x = rng.standard_normal(n)
     out = np.ones(n + w)
-    kernels.symmetric_product(*kernels.upper_rows(system.mass), x, out, (0,) * w)
+    kernels.symmetric_product(*preparation.upper_rows(system.mass), x, out, (0,) * w)
     exact = system.mass @ x
     assert np.max(np.abs(out[:n] - exact)) < 1e-12 * np.max(np.abs(exact))
     assert np.all(out[n:] == 0.0)
@@ -145,8 +146,8 @@ def test_unit_responses_are_the_full_solve_where_they_are_kept(kernels):
     catenary = load_catenary("benchmark")
     system = linearise(find_shape(build_layout(catenary, level_design(catenary), 10, 2.0, 4.0)))
     factor = prepare_passage(system, 1e-3).factor
-    w = kernels.padded_width(factor.bandwidth)
-    unit_factor = kernels.unit_factor(factor.factor, w)
+    w = preparation.padded_width(factor.bandwidth)
+    unit_factor = preparation.unit_factor(factor.factor, w)
     n = system.n_dofs
     dofs = system.contact_wire.z_dofs[len(system.contact_wire.z_dofs) // 2]
     unit = np.zeros((n + w, 4))

@@ -38,10 +38,10 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-import scipy.sparse as sp
 from numba import njit, uint64
 
 from .active_set import FULL_SWITCH_ITERATIONS, MAX_ACTIVE_SET_ITERATIONS
+from .kernel_preparation import TRUNCATION
 
 # Slots of the step coefficients (PassageArrays.coefficients; the span-mode loop's too): the right-hand
 # side's e = E1 u + E2 v + E3 a and y = G1 u + G2 v + G3 a, Newmark's a0..a5, k_h, Rayleigh β, and for the
@@ -68,9 +68,6 @@ from .active_set import FULL_SWITCH_ITERATIONS, MAX_ACTIVE_SET_ITERATIONS
 # steps, unresolved steps, first and last row of the unit responses.
 CONTACT, ELEMENT, SLACK_STEPS, UNRESOLVED, FIRST_ROW, LAST_ROW = range(6)
 
-WIDTH_STEP = 8  # band widths are padded to a multiple of this: fewer compiled versions
-TRUNCATION = 1e-30  # relative size of a unit response's entries left out (unit_responses)
-
 
 class PassageArrays(NamedTuple):
     """What the compiled loop reads, in the factor's DOF order. n DOFs, band width w, D droppers.
@@ -78,9 +75,9 @@ class PassageArrays(NamedTuple):
     Attributes
     ----------
     upper, lower, scale :
-        K̂ = Ûᵀ D² Û by rows and by columns, and D⁻² (:func:`unit_factor`).
+        K̂ = Ûᵀ D² Û by rows and by columns, and D⁻² (``kernel_preparation.unit_factor``).
     m_ptr, m_offset, m_values :
-        Upper triangle of M by rows (:func:`upper_rows`).
+        Upper triangle of M by rows (``kernel_preparation.upper_rows``).
     b_ptr, b_index, b_values :
         CSR of the dropper elongation matrix B (D, n).
     dropper_response_t : ndarray (D, n)
@@ -186,77 +183,10 @@ class PassageState(NamedTuple):
     dropper_max: np.ndarray
 
 
-def padded_width(bandwidth: int) -> int:
-    """The band width the kernels are compiled for: ``bandwidth`` rounded up to a multiple of WIDTH_STEP."""
-    return -(-bandwidth // WIDTH_STEP) * WIDTH_STEP
-
-
-class UnitFactor(NamedTuple):
-    """K̂ = Uᵀ U = Ûᵀ D² Û with Û unit upper triangular, for the sweeps of :func:`solve`. Band width w.
-
-    Attributes
-    ----------
-    upper : ndarray (n + w, w)
-        Û by rows, ``upper[i, m - 1] = Û[i, i + m]`` for m = 1..w, zero outside the matrix.
-    lower : ndarray (n + w, w)
-        Û by columns in reverse order, ``lower[n - 1 - j, m - 1] = Û[j - m, j]``, zero outside.
-    scale : ndarray (n + w,)
-        D⁻² = 1 / U[i, i]², zero in the padding.
-    """
-
-    upper: np.ndarray
-    lower: np.ndarray
-    scale: np.ndarray
-
-
-def unit_factor(ab: np.ndarray, width: int) -> UnitFactor:
-    """:class:`UnitFactor` of scipy's upper band storage of U (``ab[b + i - j, j] = U[i, j]``, b <= width)."""
-    b, n = ab.shape[0] - 1, ab.shape[1]
-    w = width
-    diagonal = ab[b]
-    upper = np.zeros((n + w, w))
-    lower = np.zeros((n + w, w))
-    for m in range(1, b + 1):
-        entries = ab[b - m, m:] / diagonal[: n - m]  # Û[i, i + m], i = 0..n-m-1
-        upper[: n - m, m - 1] = entries
-        lower[: n - m, m - 1] = entries[::-1]  # column j = i + m at row n - 1 - j
-    scale = np.zeros(n + w)
-    scale[:n] = 1.0 / diagonal**2
-    return UnitFactor(upper, lower, scale)
-
-
-def response_windows(responses: np.ndarray) -> np.ndarray:
-    """First and last row of each column of ``responses`` above TRUNCATION times its largest entry, (k, 2)."""
-    big = np.abs(responses) > TRUNCATION * np.abs(responses).max(axis=0)
-    first = np.argmax(big, axis=0)
-    last = responses.shape[0] - 1 - np.argmax(big[::-1], axis=0)
-    return np.stack([first, last], axis=1).astype(np.int64)
-
-
-def upper_rows(matrix: sp.spmatrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Upper triangle of a symmetric matrix by rows, diagonal first, for :func:`symmetric_product`.
-
-    Returns ``ptr`` (n + 1,), ``offset`` (nnz,) = column - row (uint8, or uint16 for a wide band)
-    and ``values`` (nnz,): the product reads each stored entry once for both triangles.
-    """
-    upper = sp.triu(matrix).tocsr()
-    upper.sum_duplicates()
-    upper.sort_indices()
-    n = upper.shape[0]
-    rows = np.repeat(np.arange(n), np.diff(upper.indptr))
-    offset = upper.indices - rows
-    if np.any(offset[upper.indptr[:-1]] != 0) or np.any(np.diff(upper.indptr) == 0):
-        raise ValueError("upper_rows: a row without its diagonal entry")
-    return (
-        upper.indptr.astype(np.int64),
-        offset.astype(np.uint8 if offset.max() < 256 else np.uint16),
-        upper.data.astype(float),
-    )
-
-
 @njit(cache=True, fastmath={"contract"})
 def symmetric_product(ptr, offset, values, x, out, width):  # pragma: no cover - compiled
-    """out = A x from A's upper triangle (:func:`upper_rows`); out (n + w,), its last w entries zeroed."""
+    """out = A x from A's upper triangle (``kernel_preparation.upper_rows``); out (n + w,), its last w
+    entries zeroed."""
     w = len(width)
     n = ptr.size - 1
     for i in range(w):
@@ -307,7 +237,8 @@ def _sweep(rows, rhs, scale, out, width):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def solve(upper, lower, scale, b, sweep, width):  # pragma: no cover - compiled
-    """Solve Ûᵀ D² Û x = b in place (:class:`UnitFactor`); b and ``sweep`` (n + w,) with zero tails.
+    """Solve Ûᵀ D² Û x = b in place (``kernel_preparation.UnitFactor``); b and ``sweep`` (n + w,) with
+    zero tails.
 
     Forward Ûᵀ z = b into ``sweep`` in reverse order (row j at n - 1 - j, so that both sweeps
     read their unknowns at positive offsets), then Û x = D⁻² z into b.

@@ -44,6 +44,7 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 from ..model.definition import PantographDefinition
 from .active_set import settle
 from .history import PassageHistory
+from .kernel_preparation import padded_width, response_windows, unit_factor, upper_rows
 from .linear_system import LinearSystem
 from .newmark import NewmarkConstants, Trajectory, passage_positions
 from .pantograph import PantographMatrices, pantograph_matrices, static_contact
@@ -391,9 +392,9 @@ def _kernel_arrays(
         M, B, W = M[order][:, order], B[:, order], W[order]
     index = np.empty_like(order)  # DOF -> position in the factor's order
     index[order] = np.arange(order.size)
-    width = kernels.padded_width(factor.bandwidth)
-    unit = kernels.unit_factor(factor.factor, width)
-    m_ptr, m_offset, m_values = kernels.upper_rows(M)
+    width = padded_width(factor.bandwidth)
+    unit = unit_factor(factor.factor, width)
+    m_ptr, m_offset, m_values = upper_rows(M)
     B.sort_indices()
     alpha, beta = system.alpha, system.beta
     kh = system.static.layout.catenary.contact_stiffness
@@ -417,7 +418,7 @@ def _kernel_arrays(
         b_index=B.indices.astype(np.int64),
         b_values=B.data.astype(float),
         dropper_response_t=np.ascontiguousarray(W.T),
-        dropper_window=kernels.response_windows(W),
+        dropper_window=response_windows(W),
         dropper_flexibility=np.ascontiguousarray(prepared.dropper_flexibility, dtype=float),
         dropper_rate=system.dropper_rate.astype(float),
         dropper_force=system.dropper_force.astype(float),
