@@ -340,6 +340,20 @@ def _small_solve(A, r, size):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def settle_workspace(n_drop):  # pragma: no cover - compiled
+    """The arrays :func:`_settle` works in, for ``n_drop`` droppers: A, r, λ, the slack indices, the
+    droppers' forces and the new slack states."""
+    return (
+        np.zeros((n_drop + 1, n_drop + 1)),
+        np.zeros(n_drop + 1),
+        np.zeros(n_drop),
+        np.zeros(n_drop, dtype=np.int64),
+        np.zeros(n_drop),
+        np.zeros(n_drop, dtype=np.bool_),
+    )
+
+
+@njit(cache=True)
 def _settle(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, kappa, N0, G, work):  # noqa: C901
     """The step's contact force and slack droppers' λ, by the numpy backend's active-set iteration.
 
@@ -500,14 +514,7 @@ def run_steps(d, s, first, stop, width):  # pragma: no cover - compiled
     g_dc = np.zeros(n_drop)
     dl_known = np.zeros(n_drop)
     rate_term = np.zeros(n_drop)
-    work = (
-        np.zeros((n_drop + 1, n_drop + 1)),
-        np.zeros(n_drop + 1),
-        np.zeros(n_drop),
-        np.zeros(n_drop, dtype=np.int64),
-        np.zeros(n_drop),
-        np.zeros(n_drop, dtype=np.bool_),
-    )
+    work = settle_workspace(n_drop)
     lam, idx, elastic = work[2], work[3], work[4]
     y_known = np.zeros(head + 1)
     rhs_p = np.zeros(head + 1)

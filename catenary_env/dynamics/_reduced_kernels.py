@@ -43,6 +43,7 @@ from ._kernels import (
     UNRESOLVED,
     _settle,
     pantograph_known,
+    settle_workspace,
 )
 
 CONFIGURATION = 1
@@ -335,14 +336,7 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
     gm_dc = np.zeros(n_drop)
     dl_known = np.zeros(n_drop)
     rate_term = np.zeros(n_drop)
-    work = (
-        np.zeros((n_drop + 1, n_drop + 1)),
-        np.zeros(n_drop + 1),
-        np.zeros(n_drop),
-        np.zeros(n_drop, dtype=np.int64),
-        np.zeros(n_drop),
-        np.zeros(n_drop, dtype=np.bool_),
-    )
+    work = settle_workspace(n_drop)
     lam, idx, elastic = work[2], work[3], work[4]
     y_known = np.zeros(n_p)
     rhs_p = np.zeros(n_p)
