@@ -13,6 +13,7 @@ STUDIES = {
     "validation": "EN 50318:2002 table and figure at 250 and 300 km/h",
     "convergence": "mesh and time-step convergence of σ (benchmark preset, 300 km/h)",
     "presag": "σ against pre-sag on both catenaries, and the best pre-sag against speed",
+    "design": "the six GA design studies, static analysis of the optima, σ against speed",
 }
 
 
