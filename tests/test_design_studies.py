@@ -92,3 +92,14 @@ def test_report_needs_only_the_data(quick_study, monkeypatch):
     text = design_studies.report(folder)
     assert "| B1 |" in text and "| SW3 |" in text and "α ref. 100 N" in text
     assert (folder / "speed.png").exists() and (folder / "SW3" / "design.png").exists()
+
+
+def test_catenary_report_gathers_the_studies(quick_study, capsys):
+    from experiments.cli import build_report
+
+    config, folder = quick_study
+    path = build_report(config.out)
+    text = path.read_text()
+    assert "## design:" in text and "| SW3 |" in text
+    assert "![design](design/SW3/design.png)" in text and "![speed](design/speed.png)" in text
+    assert "Not run yet:" in text and "`catenary experiment validation`" in text
