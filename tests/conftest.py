@@ -7,6 +7,7 @@ that ``pip install -e . pytest`` runs the core.
 from __future__ import annotations
 
 import importlib.util
+import os
 
 import pytest
 
@@ -14,6 +15,10 @@ from catenary_env.model.design import level_design
 from catenary_env.model.presets import load_catenary, load_pantograph
 from catenary_env.pipeline import Fidelity, solve_static
 from catenary_env.statics.shape_finding import StaticSolution
+
+# No uplift calibration is read from or written to the user's disk cache: tests that replace the simulator
+# must not leave their fake forces there (tests/test_calibration_cache.py sets a folder of its own).
+os.environ["CATENARY_ENV_CACHE"] = "off"
 
 
 def requires(module: str) -> pytest.MarkDecorator:

@@ -2,13 +2,20 @@
 
 from __future__ import annotations
 
+import argparse
 import importlib.metadata
 import json
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 
 from catenary_env import cli
 from catenary_env.cli import main
+from catenary_env.pipeline import FIDELITIES
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_static_json_gives_dropper_lengths_and_forces(capsys):
@@ -96,15 +103,62 @@ def test_the_packages_above_plug_their_commands_in():
     assert {"optimize", "experiment", "report"} <= set(handlers)  # entry points, not imports
 
 
-def test_a_command_plugin_that_fails_to_load_says_so_in_one_line(monkeypatch, capsys):
+def test_a_command_plugin_that_fails_to_load_says_why_when_run(monkeypatch, capsys):
     broken = importlib.metadata.EntryPoint(
         name="broken", value="no_such_package.cli:add_commands", group=cli.COMMANDS_GROUP
     )
     monkeypatch.setattr(importlib.metadata, "entry_points", lambda group: [broken])
     _, handlers = cli.build_parser()
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "'broken'" in err and "no_such_package" in err
     assert "simulate" in handlers and "optimize" not in handlers  # the simulator's own commands stay
+    assert capsys.readouterr().err == ""  # silent until the broken command is asked for
+    assert main(["broken", "--budget", "3"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "catenary broken: error:" in err
+    assert "ModuleNotFoundError" in err and "no_such_package" in err
+    with pytest.raises(ModuleNotFoundError):  # --debug: the real error, with its traceback
+        main(["--debug", "broken"])
+
+
+def test_a_package_shadowing_the_plugins_is_named(monkeypatch, tmp_path, capsys):
+    # A folder named like a package of the project (``optimizers``), first on the path: the command
+    # fails to load, and the message names the module that shadows the project's.
+    shadow = tmp_path / "optimizers"
+    shadow.mkdir()
+    (shadow / "__init__.py").write_text("")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    for name in [m for m in sys.modules if m == "optimizers" or m.startswith("optimizers.")]:
+        monkeypatch.delitem(sys.modules, name)
+    assert main(["optimize", "B1", "--budget", "3"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(shadow) in err and "shadows" in err
+
+
+def test_the_simulators_own_commands_start_without_the_simulator():
+    # ``catenary presets`` imports neither numpy nor the plug-ins (measured: 1.05 s -> 0.33 s to start).
+    code = (
+        "import sys; from catenary_env.cli import main; main(['presets']); "
+        "print(sorted(m for m in ('numpy', 'scipy', 'gymnasium', 'optimizers') if m in sys.modules))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT
+    ).stdout
+    assert out.splitlines()[-1] == "[]"
+
+
+def test_fidelity_names_agree_with_the_pipeline():
+    assert sorted(cli.FIDELITY_NAMES) == sorted(FIDELITIES)
+
+
+def test_help_texts_have_no_markup():
+    for argv in ([], ["static"], ["simulate"], ["evaluate"], ["optimize"], ["experiment"]):
+        parser, _ = cli.build_parser(argv[0] if argv else None)
+        text = parser.format_help() if not argv else _subparser(parser, argv[0]).format_help()
+        assert "``" not in text and ":func:" not in text and "SPEC" not in text, (argv, text)
+
+
+def _subparser(parser, name):
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return action.choices[name]
 
 
 @pytest.mark.parametrize(

@@ -11,8 +11,8 @@ Heights live on a 1 mm grid, positions on a 1 cm grid (docs/problems.md, 'Design
 
 Every design of a problem is simulated with the same pantograph uplift force: the one for which the problem's
 reference design (the level wire on the preset's droppers) has the EN 50367 mean contact force at the speed
-(docs/problems.md, 'Reference design and uplift'). It is calibrated once per catenary, speed and fidelity and
-cached in-process.
+(docs/problems.md, 'Reference design and uplift'). It is calibrated once per model, speed and fidelity and
+kept on disk for later processes and commands (:mod:`~catenary_env.problems.calibration_cache`).
 
 Examples
 --------
@@ -234,7 +234,9 @@ class DesignProblem:
         """Pantograph uplift force of the problem at a speed, N: set once on the reference design.
 
         Calibrated so that the reference design's mean contact force equals the EN 50367 target at
-        ``speed_kmh``; cached per catenary, speed and fidelity in this process.
+        ``speed_kmh`` (a few passages: some 15 s at the study fidelity, announced on stderr); kept per
+        model fingerprint (catenary and pantograph data), speed and fidelity in this process and on disk
+        (:mod:`~catenary_env.problems.calibration_cache`), so later processes and commands reuse it.
         """
         return calibrated_uplift(
             self.catenary, self.reference_design(), float(speed_kmh), resolve_fidelity(fidelity)

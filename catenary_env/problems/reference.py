@@ -1,9 +1,10 @@
-"""The reference design's pantograph setting and evaluation, computed once per process.
+"""The reference design's pantograph setting and evaluation.
 
 Every design of a problem is simulated with the same pantograph uplift force: the one for which the problem's
 reference design (the level contact wire on the preset's droppers) has the EN 50367 mean contact force at the
-speed (docs/problems.md, 'Reference design and uplift'). It is calibrated once per catenary, speed and
-fidelity and cached in-process, as are the presets.
+speed (docs/problems.md, 'Reference design and uplift'). It is calibrated once per model (catenary and
+pantograph data), speed and fidelity and kept on disk for every later process and command
+(:mod:`~catenary_env.problems.calibration_cache`), and in this process's memory, as are the presets.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from ..model.definition import CatenaryDefinition, PantographDefinition
 from ..model.design import Design, check_speed
 from ..model.presets import load_catenary, load_pantograph
 from ..pipeline import Evaluation, Fidelity
+from .calibration_cache import cached_uplift
 
 __all__ = [
     "calibrated_uplift",
@@ -26,7 +28,7 @@ __all__ = [
 
 
 def clear_caches() -> None:
-    """Forget the calibrated uplift forces and reference evaluations of this process."""
+    """Forget the calibrated uplift forces and reference evaluations of this process (not the disk cache)."""
     calibrated_uplift.cache_clear()
     reference_evaluation.cache_clear()
 
@@ -48,15 +50,13 @@ def calibrated_uplift(catenary_name: str, reference: Design, speed_kmh: float, f
     catenary = preset_catenary(catenary_name)
     speed = speed_kmh / 3.6
     check_speed(catenary, speed)
-    return float(
-        pipeline.calibrate_uplift(
-            catenary,
-            preset_pantograph(catenary.pantograph),
-            reference,
-            speed,
-            fidelity,
-            target_mean=pipeline.en50367_mean_force(speed),
-        )
+    return cached_uplift(
+        catenary,
+        preset_pantograph(catenary.pantograph),
+        reference,
+        speed_kmh,
+        fidelity,
+        target_mean=pipeline.en50367_mean_force(speed),
     )
 
 
