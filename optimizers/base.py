@@ -132,6 +132,10 @@ class OptimizationResult:
         Evaluations charged against the budget (<= budget).
     run_id : int or None
         The run's id in its store.
+    best_speed_kmh : float or None
+        The speed ``best_x`` was simulated at, km/h: ``speed_kmh``, or with a speed range (a ppo run) the
+        episode's, so that ``best_sigma`` is the lowest σ met over speeds (not comparable from one speed
+        to another: a policy's design at a speed is ``catenary propose POLICY --speed V``).
     """
 
     optimizer: str
@@ -148,6 +152,7 @@ class OptimizationResult:
     stop_reason: str
     n_simulations: int
     run_id: int | None
+    best_speed_kmh: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dict (history entries as dicts)."""

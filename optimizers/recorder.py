@@ -191,4 +191,5 @@ class RunRecorder:
             stop_reason=stop_reason,
             n_simulations=self.n_charged,
             run_id=self.run_id,
+            best_speed_kmh=None if best is None else best.speed_kmh,
         )

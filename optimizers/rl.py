@@ -20,22 +20,34 @@ interrupted training run resumes like the other optimisers: the stored steps are
 reset but not stepped, the stored reward is returned) and PPO, seeded, takes the same actions again.
 The env owns its simulations and reward convention, so RL runs neither use nor feed the design cache.
 
+A trained policy is saved by :func:`save_policy` as one file: stable-baselines3's zip archive with, inside
+it, ``catenary_env_policy.json`` (the problem, its model fingerprint, the env with its speed or speed
+range, the observation scaling, the run); :func:`load_policy` reads it back and ``catenary propose POLICY
+--speed KMH`` proposes (and simulates) the policy's design at a speed. Loading a policy unpickles parts of
+the archive, as stable-baselines3 does: load only files you trust.
+
 Examples
 --------
 >>> spec = EnvSpec("Catenary-B1-v0", speed_kmh=None, speed_range=(200.0, 320.0), fidelity="study")
 >>> policy, result = train_design_policy(spec, catenary_problem("B1"), budget=2000, seed=0)  # doctest: +SKIP
 >>> design_for_speed(policy, catenary_problem("B1"), 280.0)  # doctest: +SKIP
 array([...])
+>>> save_policy(policy, "b1-policy.zip", catenary_problem("B1"), result)  # doctest: +SKIP
+>>> policy, record = load_policy("b1-policy.zip")  # doctest: +SKIP
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import os
+import tempfile
 import time
+import zipfile
 from contextlib import ExitStack
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -52,8 +64,11 @@ __all__ = [
     "EnvSpec",
     "ObservationScaling",
     "PPOOptions",
+    "PolicyRecord",
     "design_for_speed",
     "import_stable_baselines3",
+    "load_policy",
+    "save_policy",
     "train_design_policy",
 ]
 
@@ -395,3 +410,198 @@ def design_for_speed(policy: DesignPolicy, problem: GridProblem, speed_kmh: floa
         observation = policy.observation_scaling.apply(observation)
     action, _ = policy.model.predict(observation, deterministic=True)
     return GridSpace.from_problem(problem).from_action(np.asarray(action).reshape(-1))
+
+
+POLICY_MEMBER = "catenary_env_policy.json"
+"""The member of a saved policy's zip archive that describes it (stable-baselines3 ignores it)."""
+POLICY_FORMAT = 1
+
+
+@dataclass(frozen=True)
+class PolicyRecord:
+    """What a saved policy file says about its policy, beside the network.
+
+    Attributes
+    ----------
+    problem : str
+        The problem's name (``"B1"``).
+    variable_names : tuple of str
+        The variables of the designs it proposes.
+    model_fingerprint : str
+        The fingerprint of the problem's model when trained (an edited preset or a new simulator revision
+        changes it).
+    env_spec : EnvSpec
+        The env trained on: its speed, or its speed range, and fidelity.
+    budget, seed : int
+        The training run's simulations and seed.
+    run_id : int or None
+        The training run in its store.
+    best_x : tuple of float or None
+        The best design met in training, m.
+    best_sigma : float or None
+        Its σ, N, at ``best_speed_kmh``.
+    best_speed_kmh : float or None
+        The speed ``best_x`` was simulated at, km/h.
+    package_version : str
+        The version of the package that trained it.
+    """
+
+    problem: str
+    variable_names: tuple[str, ...]
+    model_fingerprint: str
+    env_spec: EnvSpec
+    budget: int
+    seed: int
+    run_id: int | None
+    best_x: tuple[float, ...] | None
+    best_sigma: float | None
+    best_speed_kmh: float | None
+    package_version: str
+
+    @property
+    def speeds(self) -> str:
+        """The speeds trained on, in words."""
+        spec = self.env_spec
+        if spec.speed_range is not None:
+            return f"{spec.speed_range[0]:g}-{spec.speed_range[1]:g} km/h"
+        return f"{spec.speed_kmh:g} km/h"
+
+
+def save_policy(
+    policy: DesignPolicy,
+    path: str | os.PathLike[str],
+    problem: GridProblem,
+    result: OptimizationResult | None = None,
+) -> Path:
+    """Save a trained policy as one file: stable-baselines3's zip with :data:`POLICY_MEMBER` inside.
+
+    The file is written beside ``path`` and renamed onto it, so an interrupted save leaves no half file.
+
+    Parameters
+    ----------
+    policy : DesignPolicy
+        The trained policy.
+    path : path-like
+        The file to write (any name; ``.zip`` is the custom).
+    problem : GridProblem
+        Its problem (name, variables, model fingerprint).
+    result : OptimizationResult, optional
+        The training run's record (budget, seed, run, best design met).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    target = Path(path)
+    record = {
+        "format": POLICY_FORMAT,
+        "problem": problem.name,
+        "variable_names": list(problem.variable_names),
+        "model_fingerprint": str(getattr(problem, "model_fingerprint", "")),
+        "env_spec": dataclasses.asdict(policy.env_spec),
+        "observation_scaling": None
+        if policy.observation_scaling is None
+        else {
+            "mean": np.asarray(policy.observation_scaling.mean).tolist(),
+            "var": np.asarray(policy.observation_scaling.var).tolist(),
+            "epsilon": policy.observation_scaling.epsilon,
+            "clip": policy.observation_scaling.clip,
+        },
+        "budget": None if result is None else result.budget,
+        "seed": None if result is None else result.seed,
+        "run_id": None if result is None else result.run_id,
+        "best_x": None if result is None else result.best_x,
+        "best_sigma": None if result is None else result.best_sigma,
+        "best_speed_kmh": None if result is None else result.best_speed_kmh,
+        "package_version": package_version(),
+        "units": {"best_x": "m", "best_sigma": "N", "best_speed_kmh": "km/h", "env_spec.speed_kmh": "km/h"},
+    }
+    handle, temporary = tempfile.mkstemp(suffix=".zip", prefix=f".{target.name}-", dir=target.parent)
+    os.close(handle)
+    try:
+        policy.model.save(temporary)
+        with zipfile.ZipFile(temporary, "a") as archive:
+            archive.writestr(POLICY_MEMBER, json.dumps(record, indent=1))
+        os.replace(temporary, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(temporary)
+        raise
+    return target
+
+
+def load_policy(path: str | os.PathLike[str]) -> tuple[DesignPolicy, PolicyRecord]:
+    """Read a policy saved by :func:`save_policy`.
+
+    Raises
+    ------
+    OSError
+        The file cannot be read.
+    ValueError
+        Not a policy file (not a zip, or no :data:`POLICY_MEMBER`), or a damaged one: the message names the
+        file and what is wrong.
+    """
+    source = Path(path)
+    if source.is_dir():
+        raise IsADirectoryError(21, "is a folder; give a policy file", str(source))
+    try:
+        with zipfile.ZipFile(source) as archive:
+            text = archive.read(POLICY_MEMBER)
+    except zipfile.BadZipFile:
+        raise ValueError(f"{source}: not a design policy (not a zip archive); {_SAVE_HINT}") from None
+    except KeyError:
+        raise ValueError(
+            f"{source}: a zip archive without {POLICY_MEMBER}, not a design policy; {_SAVE_HINT}"
+        ) from None
+    record, scaling = _policy_record(source, text)
+    sb3 = import_stable_baselines3()
+    try:
+        model = sb3.PPO.load(source, device="cpu")
+    except Exception as error:  # whatever torch or pickle raise on a damaged archive
+        raise ValueError(
+            f"{source}: the PPO model inside cannot be loaded ({type(error).__name__}: {error})"
+        ) from error
+    return DesignPolicy(model, record.env_spec, scaling), record
+
+
+_SAVE_HINT = "save one with: catenary optimize PROBLEM --optimizer ppo --budget N --save-policy FILE"
+
+
+def _policy_record(source: Path, text: bytes) -> tuple[PolicyRecord, ObservationScaling | None]:
+    """The record of a policy file and its observation scaling; ValueError naming the field that is wrong."""
+    try:
+        data = json.loads(text)
+        if not isinstance(data, dict) or data.get("format") != POLICY_FORMAT:
+            raise ValueError(
+                f"format: {data.get('format') if isinstance(data, dict) else data!r} is not {POLICY_FORMAT}"
+            )
+        spec = data["env_spec"]
+        env_spec = EnvSpec(
+            str(spec["env_id"]),
+            None if spec["speed_kmh"] is None else float(spec["speed_kmh"]),
+            None if spec["speed_range"] is None else tuple(float(v) for v in spec["speed_range"]),
+            str(spec["fidelity"]),
+        )
+        raw = data["observation_scaling"]
+        scaling = None if raw is None else ObservationScaling(
+            np.asarray(raw["mean"], dtype=np.float64), np.asarray(raw["var"], dtype=np.float64),
+            float(raw["epsilon"]), float(raw["clip"]),
+        )  # fmt: skip
+        best_x = data.get("best_x")
+        record = PolicyRecord(
+            problem=str(data["problem"]),
+            variable_names=tuple(str(v) for v in data["variable_names"]),
+            model_fingerprint=str(data["model_fingerprint"]),
+            env_spec=env_spec,
+            budget=int(data["budget"] or 0),
+            seed=int(data["seed"] or 0),
+            run_id=data.get("run_id"),
+            best_x=None if best_x is None else tuple(float(v) for v in best_x),
+            best_sigma=data.get("best_sigma"),
+            best_speed_kmh=data.get("best_speed_kmh"),
+            package_version=str(data.get("package_version", "")),
+        )
+    except (ValueError, KeyError, TypeError) as error:
+        raise ValueError(f"{source}: {POLICY_MEMBER} is damaged ({type(error).__name__}: {error})") from None
+    return record, scaling

@@ -150,7 +150,7 @@ def test_fidelity_names_agree_with_the_pipeline():
 
 
 def test_help_texts_have_no_markup():
-    for argv in ([], ["static"], ["simulate"], ["evaluate"], ["optimize"], ["experiment"]):
+    for argv in ([], ["static"], ["simulate"], ["evaluate"], ["optimize"], ["propose"], ["experiment"]):
         parser, _ = cli.build_parser(argv[0] if argv else None)
         text = parser.format_help() if not argv else _subparser(parser, argv[0]).format_help()
         assert "``" not in text and ":func:" not in text and "SPEC" not in text, (argv, text)

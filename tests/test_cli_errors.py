@@ -7,6 +7,7 @@ makes there) and a text the one-line message must contain: the file, field, row,
 from __future__ import annotations
 
 import sqlite3
+import zipfile
 from collections.abc import Callable
 from pathlib import Path
 
@@ -22,6 +23,7 @@ SIM = ["simulate", "benchmark", "--speed", "300", "--fidelity", "test", "--uplif
 STATIC = ["static", "benchmark", "--fidelity", "test"]
 FILE = ["static", "{file}"]
 OPT = ["optimize", "synthetic-quadratic", "--budget", "10", "--workers", "1", "--quiet"]
+PPO = ["optimize", "B1", "--optimizer", "ppo", "--budget", "2", "--fidelity", "test", "--quiet"]
 
 
 def _catenary(old: str, new: str) -> Callable[[Path], None]:
@@ -74,6 +76,15 @@ def _overwrite_page(path: Path) -> None:
     page = int.from_bytes(data[16:18], "big")
     data[page : 2 * page] = b"\xa5" * page  # page 2: the first table's b-tree
     path.write_bytes(bytes(data))
+
+
+def _zip(members: dict[str, str]) -> Callable[[Path], None]:
+    def make(path: Path) -> None:
+        with zipfile.ZipFile(path, "w") as archive:
+            for name, text in members.items():
+                archive.writestr(name, text)
+
+    return make
 
 
 def _foreign(path: Path) -> None:
@@ -143,6 +154,19 @@ CASES: list[tuple[str, list[str], str, Callable[[Path], None] | None]] = [
     ("workers-and-scheduler", [*OPT, "--scheduler", "tcp://127.0.0.1:9"], "--workers", None),
     ("scheduler-bad-address", [*OPT[:-3], "--scheduler", "nowhere:::"], "nowhere:::", None),
     ("resume-no-match", [*OPT, "--store", "{file}", "--resume", "--seed", "7"], "--resume", _store()),
+    ("save-policy-not-ppo", [*OPT, "--save-policy", "{tmp}/p.zip"], "--save-policy", None),
+    ("save-policy-missing-folder", [*PPO, "--save-policy", "{tmp}/no/p.zip"], "{tmp}/no", None),
+    # -- saved policies --------------------------------------------------------------------------------
+    ("propose-missing-file", ["propose", "{tmp}/nosuch.zip", "--speed", "260"], "nosuch.zip", None),
+    ("propose-not-a-policy", ["propose", "{file}", "--speed", "260"], "{file}", _text("hello\n")),
+    ("propose-zip-no-record", ["propose", "{file}", "--speed", "260"], "{file}", _zip({"data": "{}"})),
+    (
+        "propose-damaged-record",
+        ["propose", "{file}", "--speed", "260"],
+        "catenary_env_policy.json",
+        _zip({"catenary_env_policy.json": '{"format": 1}'}),
+    ),
+    ("propose-folder", ["propose", "{tmp}", "--speed", "260"], "{tmp}", None),
     # -- run stores ----------------------------------------------------------------------------------------
     ("store-is-folder", [*OPT, "--store", "{tmp}"], "{tmp}", None),
     ("store-missing-folder", [*OPT, "--store", "{tmp}/no/runs.sqlite"], "{tmp}/no", None),
