@@ -702,6 +702,14 @@ def _warning_printer(command: str) -> Callable[..., None]:
     return show
 
 
+def _silence_stdout() -> None:
+    """Point stdout at the null device, so that the interpreter's final flush finds no closed pipe."""
+    import os
+
+    with contextlib.suppress(OSError, ValueError):
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     words = list(sys.argv[1:] if argv is None else argv)
     parser, handlers = build_parser(_command_of(words))
@@ -714,6 +722,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         warnings.showwarning = _warning_printer(args.command)
         try:
             return handler(args)
+        except BrokenPipeError:  # the reader went away (``catenary ... | head``): nothing left to say
+            _silence_stdout()
+            return 0
         except _user_errors() as error:
             if args.debug:
                 raise

@@ -113,7 +113,21 @@ def _record(
         "dropper_lengths": list(evaluation.dropper_lengths),
         "dropper_forces": list(evaluation.dropper_forces),
         "wall_time": evaluation.wall_time,
+        "units": UNITS,
     }
+
+
+UNITS = {
+    "speed_kmh": "km/h",
+    "variables, dropper_lengths": "m",
+    "uplift_force, dropper_forces": "N",
+    "statistics.mean, std, statistical_max, statistical_min, actual_max, actual_min": "N",
+    "statistics.std_over_mean": "1",
+    "statistics.contact_loss_percent": "%",
+    "statistics.max_support_uplift": "m",
+    "wall_time": "s",
+}
+"""Units of the numbers in ``catenary evaluate --json`` (SI; the table shows the support uplift in mm)."""
 
 
 def _finite_or_null(value: Any) -> Any:

@@ -105,7 +105,8 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ## Episode End
 
     Every episode is one step: `terminated=True` after it, `truncated=False`. Vector envs should use
-    `autoreset_mode=gymnasium.vector.AutoresetMode.SAME_STEP`, so that no step is spent on a reset.
+    `autoreset_mode=gymnasium.vector.AutoresetMode.SAME_STEP`, so that no step is spent on a reset:
+    `gymnasium.make_vec("Catenary-B1-v0", n)` gives it.
 
     ## Info
 
