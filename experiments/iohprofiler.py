@@ -1,0 +1,185 @@
+"""Optimisation runs in the IOHprofiler format, for IOHanalyzer (docs/problems.md, 'Experiments').
+
+The layout is that of the ``ioh`` package's ``logger.Analyzer`` (IOHexperimenter 0.3, its JSON "v2"
+format), written here without ``ioh``, which the project does not depend on. Per algorithm, a folder::
+
+    ALGORITHM/IOHprofiler_f{FID}_{PROBLEM}.json
+    ALGORITHM/data_f{FID}_{PROBLEM}/IOHprofiler_f{FID}_DIM{N}.dat
+
+The JSON holds the problem, the algorithm and one entry per run: ``instance``, ``evals`` (the run's
+length), ``best`` (``evals``, ``y``, ``x`` of its best point) and the run attribute ``seed``. The ``.dat``
+file holds one block per run, in the JSON's order: a header line ``evaluations raw_y``, then a line
+``E Y`` each time the run improved (``Y`` its σ, ten decimals, at the ``E``-th evaluation), and a last
+line at the run's last evaluation, as the Analyzer logger writes (its default trigger ``on_improvement``).
+
+What is mapped how:
+
+- *evaluation* = a simulation charged to the run (docs/problems.md, 'Optimisers': the first evaluation of
+  each distinct design); a free repeat of a design is not an evaluation;
+- *raw_y* = σ of the contact force, N, minimised (``"maximization": false``);
+- an infeasible design is not an improvement and has no y: a run logs from its first feasible design, its
+  last line carries the last evaluation's σ, or the best σ so far where that evaluation was infeasible
+  (the same curve of best-so-far values, which is what IOHanalyzer reads); a run with no feasible design
+  is left out, as the logger leaves out a run that never improved;
+- *function id* = the problem's place in ``catenary_env.problems.PROBLEMS`` from 1 (B1 is 2, SW1 is 6);
+  *instance* = 1 for every run (the problem has no random instances); the seed is a run attribute.
+
+Examples
+--------
+>>> run = IOHRun(seed=0, evaluations=((1, None, ()), (2, 41.5, (0.0,)), (3, 40.0, (0.001,))))
+>>> improvement_lines(run)
+[(2, 41.5), (3, 40.0)]
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = [
+    "FORMAT_VERSION",
+    "IOHRun",
+    "improvement_lines",
+    "read_dat",
+    "write_algorithm",
+]
+
+FORMAT_VERSION = "0.3.22"
+"""The ``ioh`` release whose Analyzer output this layout was checked against (its ``version`` field)."""
+
+SUITE = "catenary-env"
+
+
+@dataclass(frozen=True)
+class IOHRun:
+    """One run, as IOHprofiler sees it.
+
+    Attributes
+    ----------
+    seed : int
+        The run's seed (a run attribute).
+    evaluations : tuple of (int, float or None, tuple of float)
+        Per simulation charged, in order: its number from 1, its σ (N; None when infeasible) and the design
+        variables (m).
+    """
+
+    seed: int
+    evaluations: tuple[tuple[int, float | None, tuple[float, ...]], ...]
+
+
+def improvement_lines(run: IOHRun) -> list[tuple[int, float]]:
+    """The ``(evaluations, raw_y)`` lines of a run: each improvement, then its last evaluation."""
+    lines: list[tuple[int, float]] = []
+    best = float("inf")
+    for number, sigma, _ in run.evaluations:
+        if sigma is not None and sigma < best:
+            best = sigma
+            lines.append((number, sigma))
+    if lines and run.evaluations:
+        last_number, last_sigma, _ = run.evaluations[-1]
+        if lines[-1][0] != last_number:
+            lines.append((last_number, best if last_sigma is None else last_sigma))
+    return lines
+
+
+def _best(run: IOHRun) -> tuple[int, float, tuple[float, ...]] | None:
+    feasible = [e for e in run.evaluations if e[1] is not None]
+    if not feasible:
+        return None
+    number, sigma, x = min(feasible, key=lambda e: (e[1], e[0]))
+    return number, float(sigma or 0.0), x
+
+
+def write_algorithm(
+    root: Path,
+    algorithm: str,
+    info: str,
+    function_id: int,
+    problem: str,
+    dimension: int,
+    runs: Sequence[IOHRun],
+    attributes: dict[str, str] | None = None,
+) -> Path | None:
+    """Write one algorithm's runs on one problem under ``root/algorithm``; return the JSON's path.
+
+    Returns None (and writes nothing) when no run found a feasible design.
+    """
+    kept = [run for run in runs if _best(run) is not None]
+    if not kept:
+        return None
+    folder = Path(root) / algorithm
+    data_dir = f"data_f{function_id}_{problem}"
+    data_name = f"IOHprofiler_f{function_id}_DIM{dimension}.dat"
+    (folder / data_dir).mkdir(parents=True, exist_ok=True)
+    blocks = []
+    entries = []
+    for run in kept:
+        blocks.append("evaluations raw_y\n" + "".join(f"{e} {y:.10f}\n" for e, y in improvement_lines(run)))
+        number, sigma, x = _best(run)  # type: ignore[misc]
+        entries.append(
+            {
+                "instance": 1,
+                "evals": int(run.evaluations[-1][0]),
+                "best": {"evals": int(number), "y": sigma, "x": [float(v) for v in x]},
+                "seed": int(run.seed),
+            }
+        )
+    (folder / data_dir / data_name).write_text("".join(blocks), encoding="utf-8")
+    meta: dict[str, object] = {
+        "version": FORMAT_VERSION,
+        "suite": SUITE,
+        "function_id": int(function_id),
+        "function_name": problem,
+        "maximization": False,
+        "algorithm": {"name": algorithm, "info": info},
+    }
+    if attributes:
+        meta["experiment_attributes"] = [{key: str(value)} for key, value in attributes.items()]
+    meta["run_attributes"] = ["seed"]
+    meta["attributes"] = ["evaluations", "raw_y"]
+    meta["scenarios"] = [{"dimension": int(dimension), "path": f"{data_dir}/{data_name}", "runs": entries}]
+    path = folder / f"IOHprofiler_f{function_id}_{problem}.json"
+    path.write_text(json.dumps(meta, indent=1) + "\n", encoding="utf-8")
+    return path
+
+
+def read_dat(path: Path) -> list[list[tuple[int, float]]]:
+    """The runs of a ``.dat`` file: per block, its ``(evaluations, raw_y)`` lines.
+
+    Raises
+    ------
+    ValueError
+        A line before the first header, a header other than ``evaluations raw_y``, or a line that is not
+        an integer and a number.
+    """
+    runs: list[list[tuple[int, float]]] = []
+    for number, line in enumerate(Path(path).read_text(encoding="utf-8").splitlines(), start=1):
+        fields = line.split()
+        if not fields:
+            continue
+        if not fields[0][0].isdigit():
+            if fields != ["evaluations", "raw_y"]:
+                raise ValueError(f"{path}:{number}: header {line!r}, expected 'evaluations raw_y'")
+            runs.append([])
+            continue
+        if not runs or len(fields) != 2:
+            raise ValueError(f"{path}:{number}: {line!r} is not a line 'evaluations raw_y' of a run")
+        runs[-1].append((int(fields[0]), float(fields[1])))
+    return runs
+
+
+def runs_from_rows(rows: Iterable[dict[str, object]]) -> dict[int, IOHRun]:
+    """IOH runs by seed from tidy evaluation rows (``seed``, ``simulation``, ``charged``, ``feasible``,
+    ``sigma_N``, ``x_m``): only the charged evaluations count."""
+    per_seed: dict[int, list[tuple[int, float | None, tuple[float, ...]]]] = {}
+    for row in rows:
+        if not int(float(str(row["charged"]))):
+            continue
+        sigma = float(str(row["sigma_N"])) if int(float(str(row["feasible"]))) else None
+        x = tuple(float(v) for v in str(row["x_m"]).split())
+        per_seed.setdefault(int(float(str(row["seed"]))), []).append(
+            (int(float(str(row["simulation"]))), sigma, x)
+        )
+    return {seed: IOHRun(seed, tuple(sorted(evals))) for seed, evals in sorted(per_seed.items())}

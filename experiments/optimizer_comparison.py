@@ -1,0 +1,448 @@
+"""Study 4: which optimiser finds the smoothest design with the fewest simulations (docs/problems.md,
+'Experiments').
+
+The study's GA, nevergrad's CMA-ES, DE, PSO, random search and NGOpt, and the PPO design policy, on B1
+and SW1 at 300 km/h, each with the same budget of simulations and several seeds. Every run goes to one
+run store (``runs.sqlite`` in the study's folder, or ``Config.store``) and is resumed from it: a study
+run again, or interrupted and restarted, replays what is stored and simulates only what is missing, and
+a design simulated by one run is served to the others from the store's cache (it is still charged to
+each run's budget, so that a run's result does not depend on what else the store holds).
+
+Outputs (``results/optimizers/``):
+
+- ``evaluations.csv``: every evaluation of every run (run, optimizer, problem, seed, index, the number of
+  the simulation it belongs to, σ, feasible, charged, cached, the seconds the run spent on it and the
+  seconds its simulation took wherever it was made, the design);
+- ``runs.csv``: one line per run, and a line "not run" with the reason for an optimiser that cannot run
+  here; ``reference.csv``: σ of each problem's reference design;
+- ``optimizers.md`` and ``summary.csv``: per problem and optimiser, the final σ (median, inter-quartile
+  range, best), the runs that came within 2 % of the best σ any run found and the simulations they
+  needed, the share of infeasible proposals and the simulation time per run;
+- ``convergence.png``: best σ so far against simulations, median and inter-quartile band per optimiser,
+  one panel per problem;
+- ``ioh/``: the runs in the IOHprofiler format, for IOHanalyzer (:mod:`experiments.iohprofiler`).
+
+Settings. Full: the study fidelity, 300 simulations a run, 5 seeds, the GA's population of
+docs/problems.md ('Optimisers'), nevergrad's batches of 8, PPO as in :mod:`experiments.rl_studies`
+(rollouts of 32 steps, the policy starting at the reference design with a spread of 4 mm). Quick: the
+"test" fidelity, 12 simulations a run, 2 seeds, a GA population of 6 and PPO rollouts of 8 steps (a smoke
+test of the machinery, not a comparison).
+
+NGOpt: with nevergrad 1.0.12 and numpy >= 2.3 NGOpt fails where it selects a MetaModel optimiser
+(:func:`optimizers.nevergrad_adapters.ngopt_fault`); on these integer grids it selects
+DoubleFastGADiscreteOnePlusOne and runs. Where it cannot run, the study records it as "not run" with the
+reason instead of failing.
+
+    python -m experiments.optimizer_comparison [--full] [--workers 2] [--out results]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from catenary_env.problems import PROBLEMS as DESIGN_PROBLEMS
+from catenary_env.problems import get_problem
+from optimizers.base import OptimizationResult, get_optimizer
+from optimizers.catenary_adapter import catenary_problem
+from optimizers.ga import GAOptions
+from optimizers.nevergrad_adapters import NevergradOptions, ngopt_fault
+from optimizers.problem import GridSpace
+from optimizers.runner import optimize
+from optimizers.store import RunStore
+
+from .common import DEFAULT_OUT, markdown_table, read_csv, study_dir, write_csv
+from .design_evaluations import evaluate_designs
+from .iohprofiler import runs_from_rows, write_algorithm
+from .rl_studies import policy_options, train_policy
+
+NAME = "optimizers"
+PROBLEMS = ("B1", "SW1")
+OPTIMIZERS = ("ga", "cma", "de", "pso", "random", "ngopt", "ppo")
+SPEED_KMH = 300.0
+TARGET = 0.02
+"""Within 2 % of the best σ any run found on the problem."""
+
+
+@dataclass(frozen=True)
+class Config:
+    """The study's settings (quick unless ``full``).
+
+    Attributes
+    ----------
+    full : bool
+        The study fidelity, 300 simulations a run, 5 seeds; else quick.
+    out : Path
+        The results folder; the study writes into ``out/optimizers``.
+    workers : int
+        Local worker processes for the simulations of a batch (PPO steps its env in this process).
+    store : Path or None
+        The run store; default ``out/optimizers/runs.sqlite``.
+    problems : tuple of str
+        The design problems compared.
+    """
+
+    full: bool = False
+    out: Path = DEFAULT_OUT
+    workers: int = 1
+    store: Path | None = None
+    problems: tuple[str, ...] = PROBLEMS
+
+    @property
+    def fidelity(self) -> str:
+        return "study" if self.full else "test"
+
+    @property
+    def budget(self) -> int:
+        return 300 if self.full else 12
+
+    @property
+    def seeds(self) -> tuple[int, ...]:
+        return (0, 1, 2, 3, 4) if self.full else (0, 1)
+
+    def options(self, optimizer: str) -> Any:
+        """The hyper-parameters of an optimiser in this setting."""
+        if optimizer == "ga":
+            return GAOptions() if self.full else GAOptions(population_size=6)
+        if optimizer == "ppo":
+            return policy_options(32 if self.full else 8)
+        return NevergradOptions()
+
+
+def main(config: Config) -> Path:
+    folder = study_dir(config.out, NAME)
+    store_path = config.store or folder / "runs.sqlite"
+    evaluation_rows: list[dict[str, Any]] = []
+    run_rows: list[dict[str, Any]] = []
+    reference_rows: list[dict[str, Any]] = []
+    with RunStore(store_path) as store:
+        for problem in config.problems:
+            reference = get_problem(problem).reference_x()
+            (outcome,) = evaluate_designs(
+                store, problem, [(reference, SPEED_KMH)], config.fidelity, config.workers
+            )
+            reference_rows.append(
+                {
+                    "problem": problem,
+                    "speed_kmh": SPEED_KMH,
+                    "fidelity": config.fidelity,
+                    "sigma_N": outcome.sigma,
+                }
+            )
+            for optimizer in OPTIMIZERS:
+                for seed in config.seeds:
+                    result, note = _run(store, config, optimizer, problem, seed)
+                    if result is None:
+                        run_rows.append(_not_run_row(config, optimizer, problem, seed, note))
+                        continue
+                    rows = _evaluation_rows(store, result, problem)
+                    evaluation_rows.extend(rows)
+                    run_rows.append(_run_row(config, result, problem, rows, note))
+                    print(_run_line(run_rows[-1]), file=sys.stderr, flush=True)
+    write_csv(folder / "evaluations.csv", evaluation_rows)
+    write_csv(folder / "runs.csv", run_rows)
+    write_csv(folder / "reference.csv", reference_rows)
+    report(folder)
+    return folder
+
+
+def _run(
+    store: RunStore, config: Config, optimizer: str, problem: str, seed: int
+) -> tuple[OptimizationResult | None, str]:
+    """One run (resumed from the store), or None and why it cannot run here."""
+    options = config.options(optimizer)
+    if optimizer == "ppo":
+        _, result = train_policy(
+            store, problem, config.budget, seed, options, config.fidelity, speed_kmh=SPEED_KMH,
+            quiet=not config.full,
+        )  # fmt: skip
+        return result, "PPO, spread 4 mm around the reference design"
+    space = GridSpace.from_problem(catenary_problem(problem))
+    spec = get_optimizer(optimizer)
+    try:  # built once before the run, so that an optimiser that cannot run leaves no run in the store
+        engine = spec.optimizer_class(space, config.budget, seed, options)  # type: ignore[call-arg]
+    except (ImportError, RuntimeError) as error:
+        return None, str(error)
+    note = f"NGOpt selected {engine.selected_optimizer}" if optimizer == "ngopt" else ""
+    try:
+        result = optimize(
+            problem, optimizer, config.budget, seed, speed_kmh=SPEED_KMH, fidelity=config.fidelity,
+            options=options, store=store, resume=True, start_if_none=True, n_workers=config.workers,
+            quiet=not config.full,
+        )  # fmt: skip
+    except TypeError as error:
+        fault = ngopt_fault()
+        if optimizer != "ngopt" or fault is None:
+            raise
+        return None, f"failed part-way ({error}): {fault}"
+    return result, note
+
+
+def _evaluation_rows(store: RunStore, result: OptimizationResult, problem: str) -> list[dict[str, Any]]:
+    """The tidy rows of a run's evaluations (``result.problem`` is the store's key: the name and the
+    model's fingerprint)."""
+    space = GridSpace.from_problem(catenary_problem(problem))
+    rows = []
+    simulation = 0
+    for record in result.history:
+        simulation += int(record.charged)
+        if record.cached and record.charged:  # simulated by another run: its own time
+            key = space.design_key(record.x)
+            found = store.lookup(space.store_key, key, record.speed_kmh, result.fidelity)
+            simulation_time = found.wall_time if found is not None else 0.0
+        else:
+            simulation_time = record.wall_time
+        rows.append(
+            {
+                "run": result.run_id,
+                "optimizer": result.optimizer,
+                "problem": problem,
+                "seed": result.seed,
+                "index": record.index,
+                "simulation": simulation,
+                "sigma_N": record.sigma if record.feasible and record.sigma is not None else float("nan"),
+                "feasible": int(record.feasible),
+                "charged": int(record.charged),
+                "cached": int(record.cached),
+                "wall_time_s": record.wall_time,
+                "simulation_time_s": simulation_time if record.charged else 0.0,
+                "x_m": " ".join(f"{v:.6g}" for v in record.x),
+            }
+        )
+    return rows
+
+
+def _run_row(
+    config: Config, result: OptimizationResult, problem: str, rows: list[dict[str, Any]], note: str
+) -> dict[str, Any]:
+    infeasible = sum(1 for r in rows if not r["feasible"])
+    return {
+        "run": result.run_id,
+        "optimizer": result.optimizer,
+        "problem": problem,
+        "seed": result.seed,
+        "budget": result.budget,
+        "fidelity": config.fidelity,
+        "status": "done",
+        "stop_reason": result.stop_reason,
+        "n_simulations": result.n_simulations,
+        "n_evaluations": len(rows),
+        "best_sigma_N": result.best_sigma if result.best_sigma is not None else float("nan"),
+        "infeasible_share": infeasible / len(rows) if rows else float("nan"),
+        "simulation_time_s": sum(r["simulation_time_s"] for r in rows),
+        "note": note,
+    }
+
+
+def _not_run_row(config: Config, optimizer: str, problem: str, seed: int, reason: str) -> dict[str, Any]:
+    return {
+        "run": "",
+        "optimizer": optimizer,
+        "problem": problem,
+        "seed": seed,
+        "budget": config.budget,
+        "fidelity": config.fidelity,
+        "status": "not run",
+        "stop_reason": "",
+        "n_simulations": 0,
+        "n_evaluations": 0,
+        "best_sigma_N": float("nan"),
+        "infeasible_share": float("nan"),
+        "simulation_time_s": 0.0,
+        "note": reason,
+    }
+
+
+def _run_line(row: dict[str, Any]) -> str:
+    return (
+        f"{row['optimizer']} on {row['problem']} seed {row['seed']}: best σ {row['best_sigma_N']:.3f} N "
+        f"after {row['n_simulations']} simulations ({row['stop_reason']})"
+    )
+
+
+# -- analysis (from the data files alone) ----------------------------------------------------------------
+
+
+def best_so_far(rows: list[dict[str, Any]], budget: int) -> np.ndarray:
+    """Best σ so far after each simulation 1..budget of one run (+inf before its first feasible design;
+    the last value carried on where the run stopped early)."""
+    curve = np.full(budget, np.inf)
+    best = np.inf
+    for row in sorted(rows, key=lambda r: r["index"]):
+        if row["feasible"] and row["sigma_N"] < best:
+            best = row["sigma_N"]
+        if row["simulation"] >= 1:
+            curve[int(row["simulation"]) - 1 :] = best
+    return curve
+
+
+def quantiles(curves: np.ndarray, q: tuple[float, ...] = (0.25, 0.5, 0.75)) -> np.ndarray:
+    """Quantiles over runs (axis 0) of curves that may hold +inf; NaN where a quantile is infinite."""
+    finite = np.where(np.isfinite(curves), curves, 1e300)
+    out = np.quantile(finite, q, axis=0)
+    return np.where(out >= 1e299, np.nan, out)
+
+
+def simulations_to_target(curve: np.ndarray, target: float) -> int | None:
+    """The first simulation after which the best σ is at most ``target``, or None."""
+    hits = np.flatnonzero(curve <= target)
+    return int(hits[0]) + 1 if len(hits) else None
+
+
+def summarise(
+    evaluations: list[dict[str, Any]], runs: list[dict[str, Any]], reference: dict[str, float]
+) -> tuple[list[dict[str, Any]], dict[str, dict[str, np.ndarray]]]:
+    """The summary rows per problem and optimiser, and the best-so-far curves per problem and optimiser."""
+    by_run: dict[Any, list[dict[str, Any]]] = {}
+    for row in evaluations:
+        by_run.setdefault(int(row["run"]), []).append(row)
+    done = [r for r in runs if r["status"] == "done"]
+    summary, curves_by = [], {}
+    for problem in dict.fromkeys(r["problem"] for r in runs):
+        pruns = [r for r in done if r["problem"] == problem]
+        budget = int(max((r["budget"] for r in pruns), default=1))
+        curves = {int(r["run"]): best_so_far(by_run.get(int(r["run"]), []), budget) for r in pruns}
+        finals = [c[-1] for c in curves.values() if np.isfinite(c[-1])]
+        target = (1.0 + TARGET) * min(finals) if finals else float("nan")
+        curves_by[problem] = {}
+        for optimizer in dict.fromkeys(r["optimizer"] for r in runs if r["problem"] == problem):
+            oruns = [r for r in pruns if r["optimizer"] == optimizer]
+            if not oruns:
+                continue
+            stack = np.array([curves[int(r["run"])] for r in oruns])
+            curves_by[problem][optimizer] = stack
+            summary.append(_summary_row(problem, optimizer, oruns, stack, target, reference.get(problem)))
+    return summary, curves_by
+
+
+def _summary_row(
+    problem: str,
+    optimizer: str,
+    runs: list[dict[str, Any]],
+    stack: np.ndarray,
+    target: float,
+    reference: float | None,
+) -> dict[str, Any]:
+    q25, median, q75 = quantiles(stack[:, -1:])[:, 0]
+    hits = [s for s in (simulations_to_target(c, target) for c in stack) if s is not None]
+    return {
+        "problem": problem,
+        "optimizer": optimizer,
+        "runs": len(runs),
+        "median_sigma_N": median,
+        "q25_sigma_N": q25,
+        "q75_sigma_N": q75,
+        "best_sigma_N": float(np.min(stack[:, -1])),
+        "reduction_percent": 100.0 * (1.0 - median / reference) if reference else float("nan"),
+        "target_sigma_N": target,
+        "runs_within_2_percent": len(hits),
+        "median_simulations_to_2_percent": float(np.median(hits)) if hits else float("nan"),
+        "infeasible_percent": 100.0 * float(np.median([r["infeasible_share"] for r in runs])),
+        "median_simulation_time_s": float(np.median([r["simulation_time_s"] for r in runs])),
+    }
+
+
+def report(folder: Path) -> str:
+    """Tables, figure and IOHprofiler files from the CSV files (no simulation)."""
+    evaluations = read_csv(folder / "evaluations.csv")
+    runs = read_csv(folder / "runs.csv")
+    reference = {r["problem"]: r["sigma_N"] for r in read_csv(folder / "reference.csv")}
+    summary, curves = summarise(evaluations, runs, reference)
+    write_csv(folder / "summary.csv", summary)
+    for row in summary:
+        row["final"] = f"{row['median_sigma_N']:.2f} [{row['q25_sigma_N']:.2f}, {row['q75_sigma_N']:.2f}]"
+        row["hits"] = f"{row['runs_within_2_percent']}/{row['runs']}"
+    table = markdown_table(
+        summary,
+        [
+            ("problem", "problem", "s"),
+            ("optimizer", "optimiser", "s"),
+            ("final", "final σ (N): median [IQR]", "s"),
+            ("best_sigma_N", "best σ (N)", ".2f"),
+            ("reduction_percent", "median vs reference (%)", ".1f"),
+            ("hits", "runs within 2 %", "s"),
+            ("median_simulations_to_2_percent", "simulations to 2 % (median)", ".0f"),
+            ("infeasible_percent", "infeasible proposals (%)", ".1f"),
+            ("median_simulation_time_s", "simulation time per run (s)", ".1f"),
+        ],
+    )
+    notes = [f"- reference design: σ = {s:.2f} N on {p}" for p, s in reference.items()]
+    done = [r for r in runs if r["status"] == "done"]
+    notes += sorted({f"- {r['optimizer']}: {r['note']}" for r in done if r["note"]})
+    notes += sorted(
+        {f"- {r['optimizer']} on {r['problem']}: not run: {r['note']}" for r in runs if r not in done}
+    )
+    text = table + "\n\n" + "\n".join(notes)
+    (folder / "optimizers.md").write_text(text + "\n", encoding="utf-8")
+    _figure(curves, reference, folder / "convergence.png")
+    _write_ioh(folder / "ioh", evaluations, runs)
+    return text
+
+
+def _figure(curves: dict[str, dict[str, np.ndarray]], reference: dict[str, float], path: Path) -> None:
+    from catenary_env.plots import pyplot
+
+    plt = pyplot()
+    fig, axes = plt.subplots(1, len(curves), figsize=(5.5 * len(curves), 4.2), squeeze=False)
+    for ax, (problem, by_optimizer) in zip(axes[0], curves.items(), strict=True):
+        for i, (optimizer, stack) in enumerate(by_optimizer.items()):
+            q25, median, q75 = quantiles(stack)
+            x = np.arange(1, stack.shape[1] + 1)
+            ax.plot(x, median, color=f"C{i}", label=f"{optimizer} ({len(stack)} runs)")
+            ax.fill_between(x, q25, q75, color=f"C{i}", alpha=0.2, linewidth=0)
+        if problem in reference:
+            ax.axhline(reference[problem], color="k", linestyle=":", label="reference design")
+        ax.set_xlabel("simulations")
+        ax.set_ylabel("best σ so far (N)")
+        ax.set_title(f"{problem}: median and inter-quartile band")
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _write_ioh(root: Path, evaluations: list[dict[str, Any]], runs: list[dict[str, Any]]) -> None:
+    function_ids = {name: number for number, name in enumerate(DESIGN_PROBLEMS, start=1)}
+    done = [r for r in runs if r["status"] == "done"]
+    for problem in dict.fromkeys(r["problem"] for r in done):
+        dimension = get_problem(problem).n_variables
+        for optimizer in dict.fromkeys(r["optimizer"] for r in done if r["problem"] == problem):
+            chosen = [r for r in done if r["problem"] == problem and r["optimizer"] == optimizer]
+            ids = {int(r["run"]) for r in chosen}
+            rows = [e for e in evaluations if int(e["run"]) in ids]
+            first = chosen[0]
+            attributes = {
+                "fidelity": str(first["fidelity"]),
+                "speed_kmh": f"{SPEED_KMH:g}",
+                "budget": f"{int(first['budget'])}",
+            }
+            info = f"catenary-env {optimizer}" + (f"; {first['note']}" if first["note"] else "")
+            write_algorithm(
+                root, optimizer, info, function_ids[problem], problem, dimension,
+                list(runs_from_rows(rows).values()), attributes,
+            )  # fmt: skip
+
+
+def cli(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument(
+        "--full", action="store_true", help="study fidelity, 300 simulations, 5 seeds (hours)"
+    )
+    parser.add_argument("--workers", type=int, default=1, help="worker processes per batch (default 1)")
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
+    parser.add_argument(
+        "--store", type=Path, default=None, help="run store (default: OUT/optimizers/runs.sqlite)"
+    )
+    args = parser.parse_args(argv)
+    config = Config(full=args.full, out=args.out, workers=args.workers, store=args.store)
+    print(report(main(config)))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(cli())

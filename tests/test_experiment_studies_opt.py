@@ -1,0 +1,166 @@
+"""Studies 4 and 5 (docs/problems.md, 'Experiments') end to end in their quick setting: the files they write,
+their re-making from the data alone, and their resumption from the run store without simulating again.
+
+The quick settings simulate on the "test" fidelity with budgets of about ten simulations: a smoke test of
+the machinery, not of the results.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("matplotlib", reason="the studies' figures need matplotlib")
+pytest.importorskip("nevergrad", reason="the optimiser comparison runs nevergrad's optimisers")
+pytest.importorskip("gymnasium", reason="PPO trains on the design environments")
+pytest.importorskip("stable_baselines3", reason="PPO comes from stable-baselines3")
+
+from catenary_env.problems.design_problem import DesignProblem  # noqa: E402
+from experiments import optimizer_comparison, rl_studies  # noqa: E402
+from experiments.common import read_csv  # noqa: E402
+from experiments.iohprofiler import IOHRun, improvement_lines, read_dat  # noqa: E402
+
+
+def _columns(path: Path) -> list[str]:
+    return path.read_text(encoding="utf-8").splitlines()[0].split(",")
+
+
+def _no_simulation(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Make any simulation of a design fail the test (calibrations of the uplift are not designs)."""
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a design was simulated")
+
+    monkeypatch.setattr(DesignProblem, "evaluate", refuse)
+
+
+def _remake_from_data(folder: Path, tmp_path: Path, module, outputs: list[str]) -> Path:
+    """Copy only the CSV data to a new folder (no run store) and re-make the outputs there."""
+    copy = tmp_path / "data_only"
+    copy.mkdir()
+    for csv in folder.glob("*.csv"):
+        shutil.copy(csv, copy)
+    for name in outputs:
+        (copy / name).unlink(missing_ok=True)
+    module.report(copy)
+    return copy
+
+
+def _check_ioh(root: Path, problems: tuple[str, ...], budget: int) -> int:
+    """Every IOHprofiler JSON parses, points to a .dat file with one block per run; return the runs."""
+    n_runs = 0
+    for meta_path in sorted(root.glob("*/IOHprofiler_f*_*.json")):
+        meta = json.loads(meta_path.read_text(encoding="utf-8"))
+        assert meta["function_name"] in problems and meta["maximization"] is False
+        assert meta["attributes"] == ["evaluations", "raw_y"]
+        (scenario,) = meta["scenarios"]
+        blocks = read_dat(meta_path.parent / scenario["path"])
+        assert len(blocks) == len(scenario["runs"]) >= 1
+        for run, block in zip(scenario["runs"], blocks, strict=True):
+            evaluations = [e for e, _ in block]
+            assert evaluations == sorted(set(evaluations))
+            assert 1 <= evaluations[0] and evaluations[-1] <= budget
+            assert run["evals"] == evaluations[-1]
+            assert run["best"]["y"] == pytest.approx(min(y for _, y in block), rel=1e-9)
+            assert len(run["best"]["x"]) == scenario["dimension"]
+        n_runs += len(blocks)
+    return n_runs
+
+
+def test_optimizer_comparison_quick(tmp_path, monkeypatch):
+    config = optimizer_comparison.Config(out=tmp_path)
+    folder = optimizer_comparison.main(config)
+    assert folder == tmp_path / "optimizers"
+    assert _columns(folder / "evaluations.csv") == [
+        "run", "optimizer", "problem", "seed", "index", "simulation", "sigma_N", "feasible", "charged",
+        "cached", "wall_time_s", "simulation_time_s", "x_m",
+    ]  # fmt: skip
+    runs = read_csv(folder / "runs.csv")
+    expected = len(config.problems) * len(optimizer_comparison.OPTIMIZERS) * len(config.seeds)
+    assert len(runs) == expected
+    for run in runs:
+        if run["status"] == "done":
+            assert run["n_simulations"] <= config.budget
+        else:  # only NGOpt may be refused here, with its reason
+            assert run["optimizer"] == "ngopt" and run["note"]
+    summary = read_csv(folder / "summary.csv")
+    assert {(r["problem"], r["optimizer"]) for r in summary} <= {
+        (p, o) for p in config.problems for o in optimizer_comparison.OPTIMIZERS
+    }
+    assert (folder / "convergence.png").stat().st_size > 0
+    assert "final σ (N): median [IQR]" in (folder / "optimizers.md").read_text(encoding="utf-8")
+    assert _check_ioh(folder / "ioh", config.problems, config.budget) >= 1
+
+    # the data alone re-make the table, the figure and the IOHprofiler files
+    _no_simulation(monkeypatch)
+    copy = _remake_from_data(folder, tmp_path, optimizer_comparison, ["summary.csv"])
+    assert (copy / "convergence.png").stat().st_size > 0
+    assert (copy / "summary.csv").read_text() == (folder / "summary.csv").read_text()
+    assert _check_ioh(copy / "ioh", config.problems, config.budget) == _check_ioh(
+        folder / "ioh", config.problems, config.budget
+    )
+
+    # run again on the same store: every run is replayed, nothing is simulated
+    optimizer_comparison.main(config)
+    assert (folder / "evaluations.csv").read_text() == (copy / "evaluations.csv").read_text()
+
+
+def test_rl_studies_quick(tmp_path, monkeypatch):
+    config = rl_studies.Config(out=tmp_path)
+    folder = rl_studies.main(config)
+    assert _columns(folder / "steps.csv") == [
+        "part", "problem", "seed", "rollout_steps", "step", "speed_kmh", "feasible", "sigma_N", "reward",
+        "x_m",
+    ]  # fmt: skip
+    steps_text = (folder / "steps.csv").read_text(encoding="utf-8")
+    steps = read_csv(folder / "steps.csv")
+    learning = [s for s in steps if s["part"] == "learning"]
+    assert len(learning) == len(config.problems) * len(config.seeds) * config.learning_budget
+    policy = [s for s in steps if s["part"] == "speed_policy"]
+    assert len(policy) == len(config.problems) * config.policy_budget
+    assert all(200.0 <= s["speed_kmh"] <= 320.0 for s in policy)
+    for s in steps:  # reward −σ of a feasible design, else the −Fm penalty (below −σ of any feasible one)
+        assert s["reward"] == pytest.approx(-s["sigma_N"]) if s["feasible"] else s["reward"] < -100.0
+    speed = read_csv(folder / "speed_policy.csv")
+    assert {r["speed_kmh"] for r in speed if r["design"] == "policy"} == set(config.sweep_kmh)
+    robust = read_csv(folder / "robust.csv")
+    assert {r["design"] for r in robust} >= {"reference", "mean_sigma"}
+    for name in ("learning_curves.png", "speed_policy.png", "robust_design.png"):
+        assert (folder / name).stat().st_size > 0
+    text = (folder / "rl.md").read_text(encoding="utf-8")
+    assert "### Speed-conditioned policy against GA optima" in text
+
+    _no_simulation(monkeypatch)
+    outputs = ["rl.md", "learning_curves.png", "speed_policy.png", "robust_design.png"]
+    copy = _remake_from_data(folder, tmp_path, rl_studies, outputs)
+    for name in outputs:
+        assert (copy / name).stat().st_size > 0
+    assert (copy / "rl.md").read_text() == text
+
+    rl_studies.main(config)  # replayed from the store: nothing simulated
+    assert (folder / "steps.csv").read_text(encoding="utf-8") == steps_text
+
+
+def test_policy_start_is_refused_where_the_bounds_are_not_centred_on_the_reference():
+    rl_studies.check_starts_at_reference("B1")
+    with pytest.raises(ValueError, match="B2"):
+        rl_studies.check_starts_at_reference("B2")
+
+
+def test_ioh_lines_are_improvements_and_the_last_evaluation():
+    run = IOHRun(0, ((1, 40.0, ()), (2, None, ()), (3, 38.0, ()), (4, 39.0, ()), (5, None, ())))
+    # the last evaluation is infeasible: its line carries the best σ so far
+    assert improvement_lines(run) == [(1, 40.0), (3, 38.0), (5, 38.0)]
+    assert improvement_lines(IOHRun(0, ((1, None, ()),))) == []
+
+
+def test_ioh_reader_refuses_a_foreign_header(tmp_path):
+    path = tmp_path / "IOHprofiler_f2_DIM5.dat"
+    path.write_text("evaluations raw_y\n1 40.0\n3 38.5\nevaluations raw_y\n2 41.0\n")
+    assert read_dat(path) == [[(1, 40.0), (3, 38.5)], [(2, 41.0)]]
+    path.write_text('"function evaluation" "current f(x)"\n1 40.0\n')
+    with pytest.raises(ValueError, match="evaluations raw_y"):
+        read_dat(path)
