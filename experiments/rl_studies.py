@@ -100,8 +100,6 @@ def train_policy(
     quiet: bool = True,
 ) -> tuple[DesignPolicy, OptimizationResult]:
     """Train (or resume) a PPO design policy on ``Catenary-{problem}-v0`` in the store."""
-    import gymnasium  # noqa: F401  (before catenary_env.envs: its import hook registers on gymnasium's import)
-
     from catenary_env.envs import register_envs
 
     check_starts_at_reference(problem)
