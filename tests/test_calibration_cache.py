@@ -21,7 +21,13 @@ from catenary_env.cli import main
 from catenary_env.model.design import level_design
 from catenary_env.model.presets import load_catenary, load_pantograph
 from catenary_env.problems import PROBLEMS, clear_caches
-from catenary_env.problems.calibration_cache import CACHE_ENV, CacheWarning, cache_file, cached_uplift
+from catenary_env.problems.calibration_cache import (
+    CACHE_ENV,
+    CacheWarning,
+    cache_file,
+    cached_uplift,
+    simulator_digest,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 FAKE_FORCE = 123.456
@@ -44,6 +50,7 @@ def calls(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Iterator[list[tupl
 
 
 def test_a_second_process_reads_the_calibration_instead_of_computing_it(calls, capsys):
+    simulator_digest.cache_clear()  # this process's digest of the source as it is now, like the other's
     assert PROBLEMS["B1"].uplift_force(300.0, "test") == FAKE_FORCE
     assert calls == [("benchmark", 300.0)]
     err = capsys.readouterr().err
