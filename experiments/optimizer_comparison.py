@@ -372,6 +372,8 @@ def report(folder: Path) -> str:
         ],
     )
     notes = [f"- reference design: σ = {s:.2f} N on {p}" for p, s in reference.items()]
+    if any(not np.isfinite(r["q75_sigma_N"]) for r in summary):
+        notes.append("- nan: the quantile falls on a run that found no feasible design")
     done = [r for r in runs if r["status"] == "done"]
     notes += sorted({f"- {r['optimizer']}: {r['note']}" for r in done if r["note"]})
     notes += sorted(
