@@ -8,6 +8,10 @@ from pathlib import Path
 from typing import Any
 
 DEFAULT_OUT = Path("results")
+STORE = "runs.sqlite"
+"""The run store the studies share, in their output folder: one store lets a study reuse what another has
+simulated (the same design at the same speed and fidelity is simulated once, optimizers/store.py), e.g. the
+GA runs of the optimiser comparison and the design studies that start from the same seed."""
 
 
 def study_dir(out: Path, name: str) -> Path:

@@ -10,11 +10,11 @@ For each problem B1, B2, B3, SW1, SW2, SW3:
    α = (k_max − k_min) / (k_max + k_min) and static dropper forces, for the reference and the optimum.
 3. *Speed robustness*: σ of the reference and the optimum from 200 to 320 km/h.
 
-Every simulation is resumable: the GA's evaluations live in the run store ``runs.sqlite`` of the study
-folder (an interrupted GA replays its stored evaluations and goes on), and every other result is appended
-to ``log.jsonl`` as it completes, keyed by the model's fingerprint, so that nothing is simulated twice. Each
-problem writes its data under ``design/<problem>/`` as soon as it is done; :func:`report` makes the
-tables and figures from those files alone.
+Every simulation is resumable: the GA's evaluations live in the run store the studies share
+(``runs.sqlite`` in the output folder; an interrupted GA replays its stored evaluations and goes on), and
+every other result is appended to ``log.jsonl`` as it completes, keyed by the model's fingerprint, so
+that nothing is simulated twice. Each problem writes its data under ``design/<problem>/`` as soon as it
+is done; :func:`report` makes the tables and figures from those files alone.
 
 Quick: the ``"test"`` fidelity (a short, coarse section), a GA of 10 individuals over 2 generations,
 7 stiffness points, 3 speeds. Full: 20 spans on the study fidelity, the study's GA, 23 stiffness points,
@@ -43,7 +43,7 @@ from catenary_env.problems.design_problem import DesignProblem, resolve_fidelity
 from optimizers.ga import GAOptions, GeneticAlgorithm
 from optimizers.runner import optimize
 
-from .common import DEFAULT_OUT, markdown_table, read_csv, study_dir, write_csv
+from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, study_dir, write_csv
 
 NAME = "design"
 PROBLEMS = ("B1", "B2", "B3", "SW1", "SW2", "SW3")
@@ -295,7 +295,7 @@ def run_problem(name: str, config: Config, folder: Path, log: ResultLog) -> Path
         speed_kmh=DESIGN_SPEED,
         fidelity=config.fidelity,
         options=options,
-        store=folder / "runs.sqlite",
+        store=Path(config.out) / STORE,
         resume=True,
         n_workers=config.workers,
         quiet=False,

@@ -3,10 +3,10 @@
 
 The study's GA, nevergrad's CMA-ES, DE, PSO, random search and NGOpt, and the PPO design policy, on B1
 and SW1 at 300 km/h, each with the same budget of simulations and several seeds. Every run goes to one
-run store (``runs.sqlite`` in the study's folder, or ``Config.store``) and is resumed from it: a study
-run again, or interrupted and restarted, replays what is stored and simulates only what is missing, and
-a design simulated by one run is served to the others from the store's cache (it is still charged to
-each run's budget, so that a run's result does not depend on what else the store holds).
+run store (the studies' shared ``runs.sqlite`` in the output folder, or ``Config.store``) and is resumed
+from it: a study run again, or interrupted and restarted, replays what is stored and simulates only what
+is missing, and a design simulated by one run is served to the others from the store's cache (it is still
+charged to each run's budget, so that a run's result does not depend on what else the store holds).
 
 Outputs (``results/optimizers/``):
 
@@ -56,7 +56,7 @@ from optimizers.problem import GridSpace
 from optimizers.runner import optimize
 from optimizers.store import RunStore
 
-from .common import DEFAULT_OUT, markdown_table, read_csv, study_dir, write_csv
+from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, study_dir, write_csv
 from .design_evaluations import evaluate_designs
 from .iohprofiler import runs_from_rows, write_algorithm
 from .rl_studies import policy_options, train_policy
@@ -82,7 +82,7 @@ class Config:
     workers : int
         Local worker processes for the simulations of a batch (PPO steps its env in this process).
     store : Path or None
-        The run store; default ``out/optimizers/runs.sqlite``.
+        The run store; default ``out/runs.sqlite``, shared by the studies.
     problems : tuple of str
         The design problems compared.
     """
@@ -116,7 +116,7 @@ class Config:
 
 def main(config: Config) -> Path:
     folder = study_dir(config.out, NAME)
-    store_path = config.store or folder / "runs.sqlite"
+    store_path = config.store or Path(config.out) / STORE
     evaluation_rows: list[dict[str, Any]] = []
     run_rows: list[dict[str, Any]] = []
     reference_rows: list[dict[str, Any]] = []
@@ -438,7 +438,7 @@ def cli(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=1, help="worker processes per batch (default 1)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
     parser.add_argument(
-        "--store", type=Path, default=None, help="run store (default: OUT/optimizers/runs.sqlite)"
+        "--store", type=Path, default=None, help="run store (default: OUT/runs.sqlite, shared by the studies)"
     )
     args = parser.parse_args(argv)
     config = Config(full=args.full, out=args.out, workers=args.workers, store=args.store)

@@ -23,10 +23,11 @@ fidelity, 14 of 16 on B1 and 15 of 16 on SW1 in a check before the study; ``rl.m
 run met). :func:`check_starts_at_reference` refuses a problem whose bounds are not centred on its
 reference design (B2, B3, SW2, SW3), where this start would not hold.
 
-Every run goes to a run store (``runs.sqlite`` in the study's folder, or ``Config.store``) and is resumed
-from it; the designs no run asked for (the reference, the policy's designs, an optimum at other speeds)
-are simulated through the same store (:func:`experiments.design_evaluations.evaluate_designs`). A policy
-is re-trained on a resumed run by replaying its stored steps (no simulation), which gives the same policy.
+Every run goes to a run store (the studies' shared ``runs.sqlite`` in the output folder, or
+``Config.store``) and is resumed from it; the designs no run asked for (the reference, the policy's
+designs, an optimum at other speeds) are simulated through the same store
+(:func:`experiments.design_evaluations.evaluate_designs`). A policy is re-trained on a resumed run by
+replaying its stored steps (no simulation), which gives the same policy.
 
 Outputs (``results/rl/``): ``steps.csv`` (every training step), ``ga_runs.csv``, ``speed_policy.csv``,
 ``robust.csv``, ``reference.csv``; ``rl.md`` (tables) and ``learning_curves.png``, ``speed_policy.png``,
@@ -60,7 +61,7 @@ from optimizers.rl import DesignPolicy, EnvSpec, PPOOptions, design_for_speed, t
 from optimizers.runner import optimize
 from optimizers.store import RunStore
 
-from .common import DEFAULT_OUT, markdown_table, read_csv, study_dir, write_csv
+from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, study_dir, write_csv
 from .design_evaluations import evaluate_designs, mean_sigma_problem
 
 NAME = "rl"
@@ -124,7 +125,7 @@ class Config:
     workers : int
         Local worker processes for the GA's and the given designs' simulations (PPO steps in this process).
     store : Path or None
-        The run store; default ``out/rl/runs.sqlite``.
+        The run store; default ``out/runs.sqlite``, shared by the studies.
     """
 
     full: bool = False
@@ -185,7 +186,7 @@ class Config:
 def main(config: Config) -> Path:
     folder = study_dir(config.out, NAME)
     tables: dict[str, list[dict[str, Any]]] = {k: [] for k in ("steps", "ga", "speed", "robust", "reference")}
-    with RunStore(config.store or folder / "runs.sqlite") as store:
+    with RunStore(config.store or Path(config.out) / STORE) as store:
         for problem in config.problems:
             _reference(store, config, problem, tables["reference"])
             _learning_curves(store, config, problem, tables["steps"])
@@ -565,7 +566,9 @@ def cli(argv: list[str] | None = None) -> int:
     parser.add_argument("--full", action="store_true", help="study fidelity, B1 and SW1 (hours)")
     parser.add_argument("--workers", type=int, default=1, help="worker processes for the GA (default 1)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
-    parser.add_argument("--store", type=Path, default=None, help="run store (default: OUT/rl/runs.sqlite)")
+    parser.add_argument(
+        "--store", type=Path, default=None, help="run store (default: OUT/runs.sqlite, shared by the studies)"
+    )
     args = parser.parse_args(argv)
     print(report(main(Config(full=args.full, out=args.out, workers=args.workers, store=args.store))))
     return 0
