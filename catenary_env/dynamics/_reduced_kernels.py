@@ -70,14 +70,17 @@ class ReducedArrays(NamedTuple):
     coupling: np.ndarray  # (T, n_c, m) M_cq
     inverse_diagonal: np.ndarray  # (T, m) 1 / D
     weight: np.ndarray  # (T, m) 1 - c_m / D
+    weighted_coupling: np.ndarray  # (T, n_c, m) M_cq (1 - c_m / D)
     shapes: np.ndarray  # (T, n_i, m) Φ
     constraint: np.ndarray  # (T, n_i, n_c) Ψ
+    shape_coupling: np.ndarray  # (T, n_i, n_c) Φ D⁻¹ M_qc over all the type's modes
     schur_band: np.ndarray  # (C, w + 1, n_b) U in LAPACK band storage (the numpy loop's)
     schur_columns: np.ndarray  # (C, n_b, w) the Cholesky factor U of S by columns (_band_solve)
     schur_rows: np.ndarray  # (C, n_b, w) U by rows
     schur_inverse_diagonal: np.ndarray  # (C, n_b)
     interface_rhs_band: np.ndarray  # (C, 2 w + 1, n_b) Y[r, r + k] at [w + k, r]
-    dropper_span: np.ndarray  # (D,)
+    dropper_span: np.ndarray  # (D,) in order of span
+    dropper_start: np.ndarray  # (S + 1,) span s's droppers are dropper_start[s] .. dropper_start[s + 1] - 1
     dropper_q: np.ndarray  # (D, m) B_q D⁻¹
     dropper_q_plain: np.ndarray  # (D, m) B_q
     dropper_c: np.ndarray  # (D, n_c) B_c
@@ -93,9 +96,13 @@ class ReducedArrays(NamedTuple):
     element_compliance: np.ndarray  # (E, 4, 4) residual
     element_droppers: np.ndarray  # (E, K) the span's droppers, -1 pads
     element_dropper_residual: np.ndarray  # (E, 4, K)
+    element_modal_compliance: np.ndarray  # (E, 4, 4) rows_q D⁻¹ rows_qᵀ
+    element_dropper_modal: np.ndarray  # (E, 4, K) rows_q D⁻¹ B_qᵀ for the span's droppers
+    element_interface: np.ndarray  # (C, n_c, n_b) S⁻¹ at span c's coupled interface DOFs
+    dropper_element_interface: np.ndarray  # (C, D, n_c) (B_c - c_m H) S⁻¹ there
     support: np.ndarray  # (supports,) interface position of each contact-wire support
     coefficients: np.ndarray  # (16,) e1..e3, g1..g3, a0..a5, k_h, β, c_m, 1 / c_k
-    config: np.ndarray  # (steps,) the pantograph's span
+    config: np.ndarray  # (steps,) the pantograph's span (its contact-wire element's)
     element: np.ndarray  # (steps,)
     shape: np.ndarray  # (steps, 4)
     wire_z: np.ndarray  # (steps,)
@@ -151,58 +158,29 @@ def _axpy(a, alpha, out, m):  # pragma: no cover - compiled
 def _band_solve(factor, b, x):  # pragma: no cover - compiled
     """x = (Uᵀ U)⁻¹ b for the banded upper factor U in :func:`reduced_passage.band_rows` form: row j of
     ``factor[0]`` holds U[j - w .. j - 1, j], row i of ``factor[1]`` holds U[i, i + 1 .. i + w], and
-    ``factor[2]`` the reciprocal diagonal."""
+    ``factor[2]`` the reciprocal diagonal. Both sweeps by columns (each unknown, once found, is
+    subtracted from the w that follow), so that the inner loops carry no dependency."""
     columns, rows, inverse = factor[0], factor[1], factor[2]
     w = columns.shape[1]
     n = b.size
     for j in range(n):
-        col = columns[j]
-        acc = 0.0
+        x[j] = b[j]
+    for j in range(n):  # Uᵀ z = b
+        xj = x[j] * inverse[j]
+        x[j] = xj
+        count = min(w, n - 1 - j)
+        row = rows[j]
+        below = x[j + 1 : j + 1 + count]
+        for k in range(count):
+            below[k] -= row[k] * xj
+    for j in range(n - 1, -1, -1):  # U x = z
+        xj = x[j] * inverse[j]
+        x[j] = xj
         lo = max(0, j - w)
-        for i in range(lo, j):
-            acc += col[w - j + i] * x[i]
-        x[j] = (b[j] - acc) * inverse[j]
-    for i in range(n - 1, -1, -1):
-        row = rows[i]
-        acc = 0.0
-        hi = min(n, i + w + 1)
-        for j in range(i + 1, hi):
-            acc += row[j - i - 1] * x[j]
-        x[i] = (x[i] - acc) * inverse[i]
-
-
-@njit(cache=True, fastmath=FAST)
-def _band_solve4(factor, b, x):  # pragma: no cover - compiled
-    """:func:`_band_solve` for four right-hand sides at once, b and x of shape (n, 4)."""
-    columns, rows, inverse = factor[0], factor[1], factor[2]
-    w = columns.shape[1]
-    n = b.shape[0]
-    for j in range(n):
-        col = columns[j]
-        a0 = a1 = a2 = a3 = 0.0
-        for i in range(max(0, j - w), j):
-            cij = col[w - j + i]
-            a0 += cij * x[i, 0]
-            a1 += cij * x[i, 1]
-            a2 += cij * x[i, 2]
-            a3 += cij * x[i, 3]
-        x[j, 0] = (b[j, 0] - a0) * inverse[j]
-        x[j, 1] = (b[j, 1] - a1) * inverse[j]
-        x[j, 2] = (b[j, 2] - a2) * inverse[j]
-        x[j, 3] = (b[j, 3] - a3) * inverse[j]
-    for i in range(n - 1, -1, -1):
-        row = rows[i]
-        a0 = a1 = a2 = a3 = 0.0
-        for j in range(i + 1, min(n, i + w + 1)):
-            rij = row[j - i - 1]
-            a0 += rij * x[j, 0]
-            a1 += rij * x[j, 1]
-            a2 += rij * x[j, 2]
-            a3 += rij * x[j, 3]
-        x[i, 0] = (x[i, 0] - a0) * inverse[i]
-        x[i, 1] = (x[i, 1] - a1) * inverse[i]
-        x[i, 2] = (x[i, 2] - a2) * inverse[i]
-        x[i, 3] = (x[i, 3] - a3) * inverse[i]
+        column = columns[j, w - j + lo :]
+        above = x[lo:j]
+        for k in range(j - lo):
+            above[k] -= column[k] * xj
 
 
 @njit(cache=True, fastmath=FAST)
@@ -223,51 +201,52 @@ def _element_rows(d, e, rows_q, rows_c):  # pragma: no cover - compiled
 
 
 @njit(cache=True, fastmath=FAST)
-def _element_responses(d, c, e, rows_q, rows_c, p_b, comp, g_modal, g_full, work_b, tmp):  # pragma: no cover
+def _element_responses(d, c, e, rows_c, p_b, comp, g_modal, g_full, mq, forces):  # pragma: no cover
     """A unit force at each of the element's 4 DOFs: interface response p_b (n_b, 4), compliance
-    (4, 4) with the residual, and the droppers' elongations, of the kept modes and with the residual."""
+    (4, 4) with the residual, the droppers' elongations, of the kept modes and with the residual, and
+    mq = rows_q D⁻¹ M_qc (4, n_c). The element lies in the pantograph's span c, which keeps all its
+    modes: its interface forces F = rows_c - c_m mq act at span c's coupled DOFs, whose S⁻¹ columns
+    and droppers' responses the configuration holds."""
     c_m = d.coefficients[MASS_FACTOR]
     s = d.element_span[e]
     t = d.span_type[s]
-    m = d.kept[c, s]
     nc = d.n_coupled[t]
     n_b = p_b.shape[0]
-    cpl = d.coupling[t]
-    inv_d = d.inverse_diagonal[t]
-    rq = np.empty((4, m))  # rows_q D⁻¹
-    mq = np.empty((4, nc))  # rows_q D⁻¹ M_qc
     for r in range(4):
-        for i in range(m):
-            rq[r, i] = rows_q[r, i] * inv_d[i]
+        local = d.element_local[e, r]
         for j in range(nc):
-            mq[r, j] = _dot(rq[r], cpl[j], m)
-    schur = (d.schur_columns[c], d.schur_rows[c], d.schur_inverse_diagonal[c])
-    forces = np.zeros((n_b, 4))  # F_b - c_m M_cq D⁻¹ F_q, then S⁻¹
-    for col in range(4):
-        for j in range(nc):
-            forces[d.coupled[s, j], col] += rows_c[col, j] - c_m * mq[col, j]
-    _band_solve4(schur, forces, p_b)
-    for r in range(4):  # rows_q D⁻¹ rows_qᵀ + (rows_c - c_m rows_q D⁻¹ M_qc) p_c, plus the residual
+            mq[r, j] = d.shape_coupling[t, local, j] if local >= 0 else 0.0
+            forces[j, r] = rows_c[r, j] - c_m * mq[r, j]
+    p_b[:] = 0.0
+    columns = d.element_interface[c]
+    for j in range(nc):
+        column = columns[j]
+        fj = forces[j]
+        for i in range(n_b):
+            row = p_b[i]
+            for r in range(4):
+                row[r] += column[i] * fj[r]
+    for r in range(4):  # rows_q D⁻¹ rows_qᵀ + residual + (rows_c - c_m rows_q D⁻¹ M_qc) p_c
         for col in range(4):
-            acc = d.element_compliance[e, r, col] + _dot(rq[r], rows_q[col], m)
+            acc = d.element_compliance[e, r, col] + d.element_modal_compliance[e, r, col]
             for j in range(nc):
-                acc += (rows_c[r, j] - c_m * mq[r, j]) * p_b[d.coupled[s, j], col]
+                acc += forces[j, r] * p_b[d.coupled[s, j], col]
             comp[r, col] = acc
+    at_droppers = d.dropper_element_interface[c]
     for q in range(d.dropper_force.size):
-        sd = d.dropper_span[q]
-        h_q = d.dropper_h[c, q]
-        c_q = d.dropper_c[q]
+        row = at_droppers[q]
         for col in range(4):
-            acc = _dot(d.dropper_q[q], rows_q[col], m) if sd == s else 0.0
-            for j in range(d.n_coupled[d.span_type[sd]]):
-                acc += (c_q[j] - c_m * h_q[j]) * p_b[d.coupled[sd, j], col]
+            acc = 0.0
+            for j in range(nc):
+                acc += row[j] * forces[j, col]
             g_modal[q, col] = acc
             g_full[q, col] = acc
     for k in range(d.element_droppers.shape[1]):
         q = d.element_droppers[e, k]
         if q >= 0:
             for col in range(4):
-                g_full[q, col] += d.element_dropper_residual[e, col, k]
+                g_modal[q, col] += d.element_dropper_modal[e, col, k]
+                g_full[q, col] += d.element_dropper_modal[e, col, k] + d.element_dropper_residual[e, col, k]
 
 
 @njit(cache=True, fastmath=FAST)
@@ -301,10 +280,64 @@ def _configure(d, st, c):  # pragma: no cover - compiled
 
 
 @njit(cache=True, fastmath=FAST)
+def _advance(u, v, acc, e_vec, y, x, cf):  # pragma: no cover - compiled
+    """Newmark update of one span's (or the interface's) coordinates to u₁ = x + y / c_k, and the next
+    step's e and y there (1-D views of equal length, so that the loop vectorises)."""
+    e1, e2, e3, g1, g2, g3 = cf[E1], cf[E2], cf[E3], cf[G1], cf[G2], cf[G3]
+    a0, a1, a2, a3, a4, a5 = cf[A0], cf[A1], cf[A2], cf[A3], cf[A4], cf[A5]
+    inv_ck = cf[INVERSE_STIFFNESS_FACTOR]
+    for i in range(u.size):
+        u_new = x[i] + inv_ck * y[i]
+        du = u_new - u[i]
+        acc_new = a0 * du - a2 * v[i] - a3 * acc[i]
+        v_new = a1 * du - a4 * v[i] - a5 * acc[i]
+        u[i] = u_new
+        v[i] = v_new
+        acc[i] = acc_new
+        e_vec[i] = e1 * u_new + e2 * v_new + e3 * acc_new
+        y[i] = g1 * u_new + g2 * v_new + g3 * acc_new
+
+
+@njit(cache=True, fastmath=FAST)
+def _rows_dot(rows, first, count, x, m, out):  # pragma: no cover - compiled
+    """out[k] = rows[first + k, :m] · x[:m] for k < count, four rows per pass over x."""
+    k = 0
+    while k + 4 <= count:
+        r0, r1, r2, r3 = rows[first + k], rows[first + k + 1], rows[first + k + 2], rows[first + k + 3]
+        s0 = s1 = s2 = s3 = 0.0
+        for i in range(m):
+            xi = x[i]
+            s0 += r0[i] * xi
+            s1 += r1[i] * xi
+            s2 += r2[i] * xi
+            s3 += r3[i] * xi
+        out[k], out[k + 1], out[k + 2], out[k + 3] = s0, s1, s2, s3
+        k += 4
+    while k < count:
+        out[k] = _dot(rows[first + k], x, m)
+        k += 1
+
+
+@njit(cache=True, fastmath=FAST)
+def _rows_axpy(rows, g, count, out, m):  # pragma: no cover - compiled
+    """out[:m] += Σ_k g[k] rows[k, :m] over k < count, four rows per pass over out."""
+    k = 0
+    while k + 4 <= count:
+        r0, r1, r2, r3 = rows[k], rows[k + 1], rows[k + 2], rows[k + 3]
+        g0, g1, g2, g3 = g[k], g[k + 1], g[k + 2], g[k + 3]
+        for i in range(m):
+            out[i] += r0[i] * g0 + r1[i] * g1 + r2[i] * g2 + r3[i] * g3
+        k += 4
+    while k < count:
+        _axpy(rows[k], g[k], out, m)
+        k += 1
+
+
+@njit(cache=True, fastmath=FAST)
 def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C901
     """Steps ``first`` to ``stop - 1`` of the passage, updating ``st`` in place."""
     cf = d.coefficients
-    e1, e2, e3, g1, g2, g3 = cf[E1], cf[E2], cf[E3], cf[G1], cf[G2], cf[G3]
+    g1, g2, g3 = cf[G1], cf[G2], cf[G3]
     a0, a1, a2, a3, a4, a5 = cf[A0], cf[A1], cf[A2], cf[A3], cf[A4], cf[A5]
     kh, beta, c_m, inv_ck = (
         cf[CONTACT_STIFFNESS],
@@ -328,10 +361,13 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
     comp = np.zeros((4, 4))
     g_modal = np.zeros((n_drop, 4))
     g_full = np.zeros((n_drop, 4))
+    m_qc = np.zeros((4, nc_max))  # the element's rows_q D⁻¹ M_qc
+    forces = np.zeros((nc_max, 4))  # its interface forces rows_c - c_m rows_q D⁻¹ M_qc
     work_b = np.zeros(n_b)
-    z = np.zeros(n_b)
     x_b = np.zeros(n_b)
-    g_c = np.zeros((n_spans, nc_max))
+    g_c = np.zeros((n_spans, nc_max))  # e_c - c_m x_c of each span's coupled interface DOFs
+    x_c = np.zeros((n_spans, nc_max))  # x_c
+    sums = np.zeros(max(nc_max, n_drop))
     g_dc = np.zeros(n_drop)
     gm_dc = np.zeros(n_drop)
     dl_known = np.zeros(n_drop)
@@ -341,6 +377,7 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
     y_known = np.zeros(n_p)
     rhs_p = np.zeros(n_p)
     fq = np.zeros(m_max)
+    h_q = np.zeros(m_max)  # h rows_q: the contact point's row over its span's modes
     contact = st.flags[CONTACT] != 0
     current = -1
 
@@ -352,67 +389,69 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
         el = d.element[k]
         if el != current:
             _element_rows(d, el, rows_q, rows_c)
-            _element_responses(d, c, el, rows_q, rows_c, p_b, comp, g_modal, g_full, work_b, z)
+            _element_responses(d, c, el, rows_c, p_b, comp, g_modal, g_full, m_qc, forces)
             current = el
         h = d.shape[k]
         s_el = d.element_span[el]
         t_el = d.span_type[s_el]
         flex = d.dropper_flexibility[c]
-        # 1. Interface part of K̂⁻¹ M e.
+        # 1. Interface part of K̂⁻¹ M e, and the droppers' modal part of step 2, span by span.
         band = d.interface_rhs_band[c]
         e_b = e_vec[n_q:]
         diag = band[width]
         for r in range(n_b):
             work_b[r] = diag[r] * e_b[r]
         for kk in range(1, width + 1):
-            upper = band[width + kk]
-            lower = band[width - kk]
+            upper, lower = band[width + kk], band[width - kk, kk:]
+            head_b, tail_b = work_b[: n_b - kk], work_b[kk:]
+            ahead, behind = e_b[kk:], e_b[: n_b - kk]
             for r in range(n_b - kk):
-                work_b[r] += upper[r] * e_b[r + kk]
-            for r in range(kk, n_b):
-                work_b[r] += lower[r] * e_b[r - kk]
+                head_b[r] += upper[r] * ahead[r]
+            for r in range(n_b - kk):
+                tail_b[r] += lower[r] * behind[r]
         for s in range(n_spans):
             t = d.span_type[s]
             off = d.modal_offset[s]
             m = d.kept[c, s]
-            w_t = d.weight[t]
-            for i in range(m):
-                fq[i] = w_t[i] * e_vec[off + i]
-            cpl = d.coupling[t]
-            for j in range(d.n_coupled[t]):
-                work_b[d.coupled[s, j]] += _dot(cpl[j], fq, m)
+            e_s = e_vec[off : off + m]
+            nc = d.n_coupled[t]
+            _rows_dot(d.weighted_coupling[t], 0, nc, e_s, m, sums)
+            for j in range(nc):
+                work_b[d.coupled[s, j]] += sums[j]
+            first_q = d.dropper_start[s]
+            n_s = d.dropper_start[s + 1] - first_q
+            _rows_dot(d.dropper_q, first_q, n_s, e_s, m, sums)
+            for j in range(n_s):
+                dl_known[first_q + j] = sums[j]
         _band_solve((d.schur_columns[c], d.schur_rows[c], d.schur_inverse_diagonal[c]), work_b, x_b)
         for s in range(n_spans):
             t = d.span_type[s]
             for j in range(d.n_coupled[t]):
-                g_c[s, j] = e_vec[n_q + d.coupled[s, j]] - c_m * x_b[d.coupled[s, j]]
+                x_c[s, j] = x_b[d.coupled[s, j]]
+                g_c[s, j] = e_vec[n_q + d.coupled[s, j]] - c_m * x_c[s, j]
         # 2. Droppers' elongations of u_known = K̂⁻¹ M e + y / c_k.
         for q in range(n_drop):
             sd = d.dropper_span[q]
             td = d.span_type[sd]
-            off = d.modal_offset[sd]
-            acc = _dot(d.dropper_q[q], e_vec[off:], d.kept[c, sd])
-            for j in range(d.n_coupled[td]):
-                acc += d.dropper_h[c, q, j] * g_c[sd, j] + d.dropper_c[q, j] * x_b[d.coupled[sd, j]]
+            nc = d.n_coupled[td]
+            acc = dl_known[q] + _dot(d.dropper_h[c, q], g_c[sd], nc) + _dot(d.dropper_c[q], x_c[sd], nc)
             dl_known[q] = acc + inv_ck * (g1 * st.Bu[q] + g2 * st.Bv[q] + g3 * st.Ba[q])
             rate_term[q] = beta * d.dropper_rate[q] * (a1 * st.Bu[q] + a4 * st.Bv[q] + a5 * st.Ba[q])
-        # The contact point: its span's modes of u_known.
+        # The contact point: h rows_q (D⁻¹ (e_q + M_qc g_c) + y_q / c_k) + h rows_c u_c.
         off = d.modal_offset[s_el]
         m = d.kept[c, s_el]
-        for i in range(m):
-            fq[i] = e_vec[off + i]
-        cpl = d.coupling[t_el]
-        for j in range(d.n_coupled[t_el]):
-            _axpy(cpl[j], g_c[s_el, j], fq, m)
-        for i in range(m):
-            fq[i] = fq[i] * d.inverse_diagonal[t_el, i] + inv_ck * y[off + i]
+        inv_d = d.inverse_diagonal[t_el]
+        r0, r1, r2, r3 = rows_q[0], rows_q[1], rows_q[2], rows_q[3]
         wire = 0.0
-        for r in range(4):
-            val = 0.0
-            val = _dot(rows_q[r], fq, m)
-            for j in range(d.n_coupled[t_el]):
-                val += rows_c[r, j] * (x_b[d.coupled[s_el, j]] + inv_ck * y[n_q + d.coupled[s_el, j]])
-            wire += h[r] * val
+        for i in range(m):
+            hq = h[0] * r0[i] + h[1] * r1[i] + h[2] * r2[i] + h[3] * r3[i]
+            h_q[i] = hq
+            wire += hq * (inv_d[i] * e_vec[off + i] + inv_ck * y[off + i])
+        for j in range(d.n_coupled[t_el]):
+            cj = d.coupled[s_el, j]
+            hm = h[0] * m_qc[0, j] + h[1] * m_qc[1, j] + h[2] * m_qc[2, j] + h[3] * m_qc[3, j]
+            hc = h[0] * rows_c[0, j] + h[1] * rows_c[1, j] + h[2] * rows_c[2, j] + h[3] * rows_c[3, j]
+            wire += hm * g_c[s_el, j] + hc * (x_b[cj] + inv_ck * y[n_q + cj])
         pantograph_known(d, st.y_p, st.yd_p, st.ydd_p, rhs_p, y_known)
         gap_known = y_known[head] - d.wire_z[k] - wire
         c_cc = d.y_star[head]
@@ -450,42 +489,24 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
             t = d.span_type[s]
             off = d.modal_offset[s]
             m = d.kept[c, s]
+            e_s = e_vec[off : off + m]
             for i in range(m):
-                fq[i] = e_vec[off + i]
+                fq[i] = e_s[i]
             if s == s_el:
-                for i in range(m):
-                    fq[i] += f * (
-                        rows_q[0, i] * h[0] + rows_q[1, i] * h[1] + rows_q[2, i] * h[2] + rows_q[3, i] * h[3]
-                    )
+                _axpy(h_q, f, fq, m)
             for qq in range(n_slack):
                 if d.dropper_span[idx[qq]] == s:
                     _axpy(d.dropper_q_plain[idx[qq]], lam[qq], fq, m)
-            cpl = d.coupling[t]
-            for j in range(d.n_coupled[t]):
-                _axpy(cpl[j], e_vec[n_q + d.coupled[s, j]] - c_m * x_b[d.coupled[s, j]], fq, m)
+            nc = d.n_coupled[t]
+            for j in range(nc):
+                sums[j] = e_vec[n_q + d.coupled[s, j]] - c_m * x_b[d.coupled[s, j]]
+            _rows_axpy(d.coupling[t], sums, nc, fq, m)
             inv_d = d.inverse_diagonal[t]
             for i in range(m):
-                p = off + i
-                u_new = fq[i] * inv_d[i] + inv_ck * y[p]
-                du = u_new - u[p]
-                acc_new = a0 * du - a2 * v[p] - a3 * acc_s[p]
-                v_new = a1 * du - a4 * v[p] - a5 * acc_s[p]
-                u[p] = u_new
-                v[p] = v_new
-                acc_s[p] = acc_new
-                e_vec[p] = e1 * u_new + e2 * v_new + e3 * acc_new
-                y[p] = g1 * u_new + g2 * v_new + g3 * acc_new
-        for i in range(n_b):
-            p = n_q + i
-            u_new = x_b[i] + inv_ck * y[p]
-            du = u_new - u[p]
-            acc_new = a0 * du - a2 * v[p] - a3 * acc_s[p]
-            v_new = a1 * du - a4 * v[p] - a5 * acc_s[p]
-            u[p] = u_new
-            v[p] = v_new
-            acc_s[p] = acc_new
-            e_vec[p] = e1 * u_new + e2 * v_new + e3 * acc_new
-            y[p] = g1 * u_new + g2 * v_new + g3 * acc_new
+                fq[i] *= inv_d[i]
+            end = off + m
+            _advance(u[off:end], v[off:end], acc_s[off:end], e_s, y[off:end], fq, cf)
+        _advance(u[n_q:], v[n_q:], acc_s[n_q:], e_vec[n_q:], y[n_q:], x_b, cf)
         mflex = d.dropper_modal_flexibility[c]
         for q in range(n_drop):
             bu = dl_known[q] + gm_dc[q] * f
@@ -506,14 +527,10 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
         st.force[k] = f
         st.head_height[k] = st.y_p[head]
         off = d.modal_offset[s_el]
-        upl = 0.0
-        for r in range(4):
-            val = 0.0
-            for i in range(d.kept[c, s_el]):
-                val += rows_q[r, i] * u[off + i]
-            for j in range(d.n_coupled[t_el]):
-                val += rows_c[r, j] * u[n_q + d.coupled[s_el, j]]
-            upl += h[r] * val
+        upl = _dot(h_q, u[off:], d.kept[c, s_el])
+        for j in range(d.n_coupled[t_el]):
+            hc = h[0] * rows_c[0, j] + h[1] * rows_c[1, j] + h[2] * rows_c[2, j] + h[3] * rows_c[3, j]
+            upl += hc * u[n_q + d.coupled[s_el, j]]
         st.wire_uplift[k] = upl
         for i in range(d.support.size):
             st.support_uplift[k, i] = u[n_q + d.support[i]]

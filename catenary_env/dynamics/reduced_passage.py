@@ -89,7 +89,7 @@ def prepare_reduced_passage(
     droppers = _dropper_arrays(reduced, modes["inverse_diagonal"])
     residual = _Residuals(reduced, c_k, c_m, droppers["dropper_span"])
     configurations = _configurations(reduced, c_k, c_m, kept, modes, droppers, residual)
-    elements = _element_arrays(reduced, droppers["dropper_span"], residual)
+    elements = _element_arrays(reduced, modes, droppers, residual)
     arrays = modes | droppers | configurations | elements
     arrays.update(
         kept=kept,
@@ -103,7 +103,7 @@ def prepare_reduced_passage(
 
 
 def _mode_arrays(reduced: ReducedSystem, c_k: float, c_m: float) -> dict[str, np.ndarray]:
-    """Each span type's modes, padded to the largest type: M_cq, 1 / D, 1 - c_m / D, Φ, Ψ."""
+    """Each span type's modes, padded to the largest type: M_cq, 1 / D, 1 - c_m / D, Φ, Ψ, Φ D⁻¹ M_qc."""
     types = reduced.types
     n_types = len(types)
     m_max = max(t.n_modes for t in types)
@@ -117,14 +117,17 @@ def _mode_arrays(reduced: ReducedSystem, c_k: float, c_m: float) -> dict[str, np
     weight = np.zeros((n_types, m_max))
     shapes = np.zeros((n_types, ni_max, m_max))
     constraint = np.zeros((n_types, ni_max, nc_max))
+    shape_coupling = np.zeros((n_types, ni_max, nc_max))
     for t, modes in enumerate(types):
         m, nc = modes.mass_coupling.shape
+        ni = modes.shapes.shape[0]
         diagonal = c_k * modes.omega2 + c_m
         coupling[t, :nc, :m] = modes.mass_coupling.T
         inv_d[t, :m] = 1.0 / diagonal
         weight[t, :m] = 1.0 - c_m / diagonal
-        shapes[t, : modes.shapes.shape[0], :m] = modes.shapes
-        constraint[t, : modes.shapes.shape[0], :nc] = modes.constraint
+        shapes[t, :ni, :m] = modes.shapes
+        constraint[t, :ni, :nc] = modes.constraint
+        shape_coupling[t, :ni, :nc] = modes.shapes @ (modes.mass_coupling / diagonal[:, None])
     return dict(
         span_type=reduced.span_type.astype(np.int64),
         modal_offset=reduced.modal_offset.astype(np.int64),
@@ -134,8 +137,10 @@ def _mode_arrays(reduced: ReducedSystem, c_k: float, c_m: float) -> dict[str, np
         coupling=coupling,
         inverse_diagonal=inv_d,
         weight=weight,
+        weighted_coupling=coupling * weight[:, None, :],
         shapes=shapes,
         constraint=constraint,
+        shape_coupling=shape_coupling,
     )
 
 
@@ -153,6 +158,8 @@ def _dropper_arrays(reduced: ReducedSystem, inv_d: np.ndarray) -> dict[str, np.n
     system = reduced.system
     B = system.dropper_elongation.tocsr()
     d_span = system.static.layout.dropper_span.astype(np.int64)
+    if np.any(np.diff(d_span) < 0):
+        raise AssertionError("the droppers are not in order of span")  # a bug, never a user error
     d_q = np.zeros((d_span.size, inv_d.shape[1]))
     d_c = np.zeros((d_span.size, max(c.size for c in reduced.coupled)))
     for s, dofs in enumerate(reduced.internal):
@@ -167,6 +174,7 @@ def _dropper_arrays(reduced: ReducedSystem, inv_d: np.ndarray) -> dict[str, np.n
             raise AssertionError("a dropper's row reaches outside its span")  # a bug, never a user error
     return dict(
         dropper_span=d_span,
+        dropper_start=np.searchsorted(d_span, np.arange(len(reduced.internal) + 1)).astype(np.int64),
         dropper_q=d_q * inv_d[reduced.span_type[d_span]],
         dropper_q_plain=d_q,
         dropper_c=d_c,
@@ -231,7 +239,8 @@ def _configurations(
     residual: _Residuals,
 ) -> dict[str, np.ndarray]:
     """Per configuration: S's banded factor, Y, H = B_q D⁻¹ M_qc, the droppers' interface responses
-    and their flexibility G (of the kept modes, and with the residual)."""
+    and their flexibility G (of the kept modes, and with the residual); and for the pantograph's span,
+    S⁻¹ at its coupled interface DOFs and the droppers' elongations there (B_c - c_m H) S⁻¹."""
     types = reduced.types
     n_spans = reduced.span_type.size
     n_b = reduced.interface.size
@@ -255,6 +264,8 @@ def _configurations(
         dropper_interface=np.zeros((n_spans, n_drop, n_b)),
         dropper_flexibility=np.zeros((n_spans, n_drop, n_drop)),
         dropper_modal_flexibility=np.zeros((n_spans, n_drop, n_drop)),
+        element_interface=np.zeros((n_spans, nc_max, n_b)),
+        dropper_element_interface=np.zeros((n_spans, n_drop, nc_max)),
     )
     # A span's share of Σ M_cq D⁻¹ M_qc, of the droppers' G and of the residual, per mode count kept.
     span_sum, modal_block, residual_block = {}, {}, {}
@@ -286,8 +297,13 @@ def _configurations(
             out["dropper_h"][p, q] = d_qd[q, :k] @ coupling[reduced.span_type[s], :, :k].T
         H = np.zeros((n_drop, n_b))  # B_c - c_m H on the interface: a unit dropper force's right-hand side
         H[d_rows, d_cols[d_valid]] = (d_c - c_m * out["dropper_h"][p])[d_valid]
-        X = sla.cho_solve_banded((factor, False), H.T, check_finite=False)
+        own = reduced.coupled[p]  # the pantograph's span: unit forces at its coupled interface DOFs
+        unit = np.zeros((n_b, own.size))
+        unit[own, np.arange(own.size)] = 1.0
+        X = sla.cho_solve_banded((factor, False), np.c_[H.T, unit], check_finite=False)
+        X, out["element_interface"][p, : own.size] = X[:, :n_drop], X[:, n_drop:].T
         out["dropper_interface"][p] = X.T
+        out["dropper_element_interface"][p, :, : own.size] = X.T[:, own]
         G = H @ X
         G_full = G.copy()
         for s in range(n_spans):
@@ -300,11 +316,16 @@ def _configurations(
 
 
 def _element_arrays(
-    reduced: ReducedSystem, d_span: np.ndarray, residual: _Residuals
+    reduced: ReducedSystem,
+    modes: dict[str, np.ndarray],
+    droppers: dict[str, np.ndarray],
+    residual: _Residuals,
 ) -> dict[str, np.ndarray]:
     """Each contact-wire element's span, its DOFs' local indices (or interface positions), and its
-    residual compliance and coupling to its span's droppers (near modes: the pantograph's span is
-    always in the near field)."""
+    compliance and coupling to its span's droppers, of the residual and of the modes with the
+    interface held (Φ D⁻¹ Φᵀ and Φ D⁻¹ B_qᵀ; near modes: the pantograph's span is always in the near
+    field)."""
+    d_span = droppers["dropper_span"]
     system = reduced.system
     lay = system.static.layout
     n_spans = reduced.span_type.size
@@ -329,9 +350,18 @@ def _element_arrays(
     el_droppers = np.full((n_el, per_span), -1, dtype=np.int64)
     el_comp = np.zeros((n_el, 4, 4))
     el_res = np.zeros((n_el, 4, per_span))
+    el_modal = np.zeros((n_el, 4, 4))
+    el_drop_modal = np.zeros((n_el, 4, per_span))
     for s in range(n_spans):
         els = np.flatnonzero(el_span == s)
         t = reduced.span_type[s]
+        m = reduced.types[t].n_modes
+        local = el_local[els, :, None]
+        phi = np.where(local >= 0, reduced.types[t].shapes[np.maximum(local[..., 0], 0)], 0.0)
+        scaled = phi * modes["inverse_diagonal"][t, :m]
+        el_modal[els] = scaled @ phi.transpose(0, 2, 1)
+        drops = np.flatnonzero(d_span == s)
+        el_drop_modal[els, :, : drops.size] = scaled @ droppers["dropper_q_plain"][drops, :m].T
         where = np.full(reduced.types[t].shapes.shape[0], -1)
         where[residual.selected[t]] = np.arange(residual.selected[t].size)
         R = residual.near[t]
@@ -339,7 +369,6 @@ def _element_arrays(
         ok = loc >= 0
         safe = np.maximum(loc, 0)
         el_comp[els] = np.where(ok[:, :, None] & ok[:, None, :], R[safe[:, :, None], safe[:, None, :]], 0.0)
-        drops = np.flatnonzero(d_span == s)
         el_droppers[els, : drops.size] = drops
         el_res[els, :, : drops.size] = np.where(ok[:, :, None], (R @ residual.span_droppers[s].T)[safe], 0.0)
     return dict(
@@ -348,6 +377,8 @@ def _element_arrays(
         element_compliance=el_comp,
         element_droppers=el_droppers,
         element_dropper_residual=el_res,
+        element_modal_compliance=el_modal,
+        element_dropper_modal=el_drop_modal,
     )
 
 
@@ -375,13 +406,12 @@ class _Arrays:
 
 
 def _passage_arrays(prepared: PreparedReducedPassage, passage: _Passage) -> dict:
-    lay = prepared.reduced.system.static.layout
-    n_spans = prepared.reduced.span_type.size
     pm = passage.pantograph
+    element = passage.element.astype(np.int64)
     return dict(
         prepared.arrays,
-        config=np.minimum((passage.position // lay.span_length).astype(np.int64), n_spans - 1),
-        element=passage.element.astype(np.int64),
+        config=prepared.arrays["element_span"][element],
+        element=element,
         shape=np.ascontiguousarray(passage.shape, dtype=float),
         wire_z=passage.wire_z.astype(float),
         pantograph_inverse=passage.pantograph_inverse,
