@@ -20,6 +20,8 @@ from numpy.typing import NDArray
 from .analysis.statistics import ContactStatistics, filtered_contact_force, passage_statistics
 from .dynamics.linear_system import LinearSystem, linearise
 from .dynamics.newmark import Trajectory
+from .dynamics.oracle import simulate_passage_reference
+from .dynamics.pantograph import frame_force
 from .dynamics.passage import PreparedPassage, prepare_passage, simulate_passage
 from .dynamics.reduced_passage import (
     PreparedReducedPassage,
@@ -30,6 +32,7 @@ from .dynamics.span_modes import reduce_system
 from .fem.layout import build_layout
 from .model.definition import CatenaryDefinition, PantographDefinition
 from .model.design import Design, DesignError, check_design, check_speed
+from .model.options import ModellingOptions
 from .statics.shape_finding import ShapeFindingError, StaticSolution, find_shape
 
 PHYSICS_REVISION = 2
@@ -42,16 +45,21 @@ def model_fingerprint(*records: object) -> str:
     """A short hash of definitions' data (provenance excluded) and :data:`PHYSICS_REVISION`.
 
     Two evaluations may share a cached result only when their fingerprints agree: an edited copy of a
-    preset that keeps its name, or a new simulator revision, gets a new fingerprint.
+    preset that keeps its name, or a new simulator revision, gets a new fingerprint. A catenary's modelling
+    choices count where they depart from the defaults, which are part of the revision.
     """
     import dataclasses
     import hashlib
     import json
 
+    default_modelling = dataclasses.asdict(ModellingOptions())
+
     def plain(record: object) -> object:
         if dataclasses.is_dataclass(record) and not isinstance(record, type):
             data = dataclasses.asdict(record)
             data.pop("provenance", None)
+            if data.get("modelling") == default_modelling:
+                data.pop("modelling")
             return data
         return record
 
@@ -215,6 +223,12 @@ def check_fidelity(catenary: CatenaryDefinition, fidelity: Fidelity) -> None:
         raise DesignError(f"fidelity.time_step = {f.time_step!r}: must lie in [1e-5, 0.01] s")
     if f.dynamics not in DYNAMICS:
         raise DesignError(f"fidelity.dynamics = {f.dynamics!r}: must be one of {', '.join(DYNAMICS)}")
+    if f.dynamics == "span-modes" and not catenary.modelling.rayleigh_only:
+        raise DesignError(
+            "fidelity.dynamics = 'span-modes': the span-mode model integrates C = alpha M + beta K with "
+            f"slack droppers dropping their damping; modelling {catenary.modelling.changed()} needs "
+            "dynamics = 'exact'"
+        )
     if f.dynamics == "span-modes":
         if not (0.0 < f.far_cutoff <= f.near_cutoff):
             raise DesignError(
@@ -269,20 +283,27 @@ def simulate_static(
     ``system`` and ``prepared`` (from :func:`prepare_dynamics`) may be passed to reuse them across
     passages. With ``statistics_only``, the span-mode model stops one span after the analysis
     section: nothing later changes the statistics (the zero-phase filter's end effect has decayed
-    over that span), and the trajectory ends there.
+    over that span), and the trajectory ends there. The force on the pantograph's frame follows the
+    catenary's ``modelling.uplift_definition``; a system that is not Rayleigh-damped
+    (:attr:`LinearSystem.rayleigh`) runs the straightforward exact loop, minutes rather than seconds.
     """
     catenary = static.layout.catenary
     system = linearise(static) if system is None else system
-    prepared = prepare_dynamics(system, fidelity) if prepared is None else prepared
-    if isinstance(prepared, PreparedReducedPassage):
-        n_steps = _statistics_steps(catenary, fidelity, speed) if statistics_only else None
-        trajectory = simulate_reduced_passage(
-            prepared, pantograph, uplift_force, speed, n_steps=n_steps, progress=progress
-        )
+    force = frame_force(system, pantograph, uplift_force)
+    if not system.rayleigh:
+        check_fidelity(catenary, fidelity)  # the span-mode model refuses it
+        trajectory = simulate_passage_reference(system, pantograph, force, speed, fidelity.time_step)
     else:
-        trajectory = simulate_passage(
-            system, pantograph, uplift_force, speed, fidelity.time_step, progress=progress, prepared=prepared
-        )
+        prepared = prepare_dynamics(system, fidelity) if prepared is None else prepared
+        if isinstance(prepared, PreparedReducedPassage):
+            n_steps = _statistics_steps(catenary, fidelity, speed) if statistics_only else None
+            trajectory = simulate_reduced_passage(
+                prepared, pantograph, force, speed, n_steps=n_steps, progress=progress
+            )
+        else:
+            trajectory = simulate_passage(
+                system, pantograph, force, speed, fidelity.time_step, progress=progress, prepared=prepared
+            )
     window = analysis_window(catenary, fidelity)
     filtered = filtered_contact_force(trajectory)
     stats = passage_statistics(trajectory, window, filtered)
@@ -295,9 +316,14 @@ def _statistics_steps(catenary: CatenaryDefinition, fidelity: Fidelity, speed: f
     return int(np.floor(end / (speed * fidelity.time_step))) + 1
 
 
-def prepare_dynamics(system: LinearSystem, fidelity: Fidelity) -> PreparedPassage | PreparedReducedPassage:
+def prepare_dynamics(
+    system: LinearSystem, fidelity: Fidelity
+) -> PreparedPassage | PreparedReducedPassage | None:
     """The design's part of the passage for the fidelity's model: the exact method's factorisation, or
-    the span modes and their Schur complements (docs/performance.md, 'Model fidelities')."""
+    the span modes and their Schur complements (docs/performance.md, 'Model fidelities'); None for a
+    system the fast loops do not integrate (:attr:`LinearSystem.rayleigh`)."""
+    if not system.rayleigh:
+        return None
     if fidelity.dynamics == "exact":
         return prepare_passage(system, fidelity.time_step)
     reduced = reduce_system(system, fidelity.near_cutoff, fidelity.far_cutoff)

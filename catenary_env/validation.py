@@ -7,11 +7,13 @@ quantity outside its range is reported as such, with the margin.
 
 from __future__ import annotations
 
+import dataclasses
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 from .model.design import level_design
+from .model.options import ModellingOptions
 from .model.presets import load_catenary, load_pantograph
 from .pipeline import Fidelity, simulate
 
@@ -92,7 +94,9 @@ def load_ranges(name: str = "en50318-2002") -> dict[float, dict[str, tuple[float
 
 
 def validate(
-    speeds_kmh: tuple[float, ...] = (250.0, 300.0), fidelity: Fidelity | None = None
+    speeds_kmh: tuple[float, ...] = (250.0, 300.0),
+    fidelity: Fidelity | None = None,
+    modelling: ModellingOptions | None = None,
 ) -> ValidationReport:
     """Simulate the EN 50318:2002 reference model and compare with the accepted ranges.
 
@@ -102,8 +106,12 @@ def validate(
         Speeds with ranges in the data file, km/h.
     fidelity : Fidelity, optional
         Defaults to the section of the preset (10 spans, central 2 analysed) with a converged mesh.
+    modelling : ModellingOptions, optional
+        Modelling choices in place of the preset's (the ablation study, docs/model.md, 'Modelling choices').
     """
     catenary = load_catenary("en50318-2002")
+    if modelling is not None:
+        catenary = dataclasses.replace(catenary, modelling=modelling)
     pantograph = load_pantograph("en50318-2002")
     if fidelity is None:
         fidelity = Fidelity(

@@ -23,6 +23,7 @@ class Study(NamedTuple):
 
 STUDIES = {
     "validation": Study("validation", "EN 50318:2002 table and figure at 250 and 300 km/h"),
+    "ablation": Study("ablation", "one modelling choice at a time: EN 50318:2002 quantities, benchmark σ"),
     "convergence": Study("convergence", "mesh and time-step convergence of σ (benchmark preset, 300 km/h)"),
     "presag": Study("presag", "σ against pre-sag on both catenaries, and the best pre-sag against speed"),
     "design": Study(

@@ -40,11 +40,12 @@ def _copy_with(tmp_path: Path, kind: str, name: str, *edits: tuple[str, str], fi
 
 
 def _leaf_fields(record: Any, prefix: str = "") -> list[str]:
-    """Dotted names of the figures of a record (nested records walked; name, provenance, None skipped)."""
+    """Dotted names of the figures of a record (nested records walked; name, provenance, None skipped, and
+    the modelling choices, which are not figures: docs/model.md, 'Modelling choices')."""
     names: list[str] = []
     for f in dataclasses.fields(record):
         value = getattr(record, f.name)
-        if f.name in ("name", "provenance") or value is None:
+        if f.name in ("name", "provenance", "modelling") or value is None:
             continue
         if dataclasses.is_dataclass(value):
             names += _leaf_fields(value, prefix + f.name + ".")

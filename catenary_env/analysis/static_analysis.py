@@ -108,10 +108,14 @@ def stiffness_profile(
         Upward force, N (docs/model.md, 'Static analysis' uses 100 N and 200 N).
     span : int, optional
         Span index; the central span by default.
+    system : LinearSystem, optional
+        An extensible linearisation of ``static`` (:func:`~catenary_env.dynamics.linear_system.linearise`),
+        for its free coordinates and contact-wire geometry.
     """
     lay = static.layout
     span = lay.n_spans // 2 if span is None else span
-    system = linearise(static) if system is None else system
+    # The extensible wires' coordinates, whatever the dynamics' linearisation: this is a nonlinear solve.
+    system = linearise(static, linearisation="extensible") if system is None else system
     positions = np.linspace(0.0, lay.span_length, n_points)
     uplift = np.empty(n_points)
     X = static.positions

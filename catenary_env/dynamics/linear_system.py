@@ -8,6 +8,13 @@ dropper's whole contribution one scalar force, which a slack dropper can switch 
 
 Dynamic boundary conditions: each wire is anchored in x at both ends of the section, the messenger
 is held in x at every support; the messenger supports and steady arms are vertical springs.
+
+The catenary's modelling choices (:class:`~catenary_env.model.options.ModellingOptions`; docs/model.md,
+'Modelling choices') change this: the messenger held in x at the section's ends only, wires that move
+vertically only at their static axial force, the droppers' geometric stiffness, Rayleigh damping over the
+wires only, slack droppers that keep their damping. The last two give a system whose damping is not
+C = αM + βK with slack droppers dropping their whole force (:attr:`LinearSystem.rayleigh` is False), which
+only the straightforward loop (:mod:`~catenary_env.dynamics.oracle`) integrates.
 """
 
 from __future__ import annotations
@@ -19,8 +26,8 @@ import scipy.sparse as sp
 
 from ..fem.ancf import hermite, hermite_dxi
 from ..fem.assembly import assemble, assemble_mass, free_matrix_scatter
-from ..fem.bar import bar_state
-from ..fem.layout import CONTACT
+from ..fem.bar import bar_state, geometric_tangent
+from ..fem.layout import CONTACT, DROPPER
 from ..statics.shape_finding import StaticSolution
 
 
@@ -92,6 +99,10 @@ class LinearSystem:
     contact_wire : ContactWireGeometry
     support_z : ndarray (n_spans + 1,)
         Free-DOF index of the contact wire's height at each support.
+    damping_matrix : scipy.sparse.csr_matrix (n, n) or None
+        C where it is not alpha M + beta K (Rayleigh damping over the wires only), N·s/m.
+    slack_dropper_damping : bool
+        True when a slack dropper keeps its damping share beta k Δl̇ and drops only its spring force.
     """
 
     static: StaticSolution
@@ -105,6 +116,8 @@ class LinearSystem:
     dropper_force: np.ndarray
     contact_wire: ContactWireGeometry
     support_z: np.ndarray
+    damping_matrix: sp.csr_matrix | None = None
+    slack_dropper_damping: bool = False
 
     @property
     def n_dofs(self) -> int:
@@ -112,29 +125,49 @@ class LinearSystem:
 
     @property
     def damping(self) -> sp.csr_matrix:
+        """C, N·s/m."""
+        if self.damping_matrix is not None:
+            return self.damping_matrix
         return (self.alpha * self.mass + self.beta * self.stiffness).tocsr()
 
+    @property
+    def rayleigh(self) -> bool:
+        """True when C = alpha M + beta K and a slack dropper drops its whole force: what the fast loops
+        (:mod:`~catenary_env.dynamics.passage`, the span-mode model) integrate."""
+        return self.damping_matrix is None and not self.slack_dropper_damping
 
-def linearise(static: StaticSolution) -> LinearSystem:
-    """Build M, K, C and the dropper and contact-wire data about a static solution."""
+
+def linearise(static: StaticSolution, linearisation: str | None = None) -> LinearSystem:
+    """Build M, K, C and the dropper and contact-wire data about a static solution.
+
+    Parameters
+    ----------
+    linearisation : {"extensible", "transverse-only"}, optional
+        Overrides the catenary's ``modelling.linearisation`` (the static analysis solves the equilibrium of
+        extensible wires whatever the dynamics use).
+    """
     lay = static.layout
     c = lay.catenary
+    options = c.modelling
+    transverse = (linearisation or options.linearisation) == "transverse-only"
     n_all = lay.n_dofs
     X, lengths = static.positions, static.lengths
     fixed = np.zeros(n_all, dtype=bool)
     fixed[lay.node_dof[lay.wire_ends.ravel()]] = True
-    fixed[lay.node_dof[lay.messenger_supports]] = True
+    if options.axial_restraint == "every-support":
+        fixed[lay.node_dof[lay.messenger_supports]] = True
+    if transverse:
+        fixed |= lay.axial_coordinates()
     free = np.flatnonzero(~fixed)
     index = np.full(n_all, -1)
     index[free] = np.arange(free.size)
 
-    state = assemble(lay, X, lengths, tangent=True)
-    # Replace the droppers' full bar tangent by their axial spring (module docstring).
+    state = assemble(lay, X, lengths, tangent=True, axial_material=not transverse)
     n_c = lay.cable_nodes.shape[0]
+    bars = bar_state(X[lay.bar_dofs()], lengths[n_c:], lay.bar_stiffness, lay.bar_axial_stiffness)
     drop = lay.dropper_bars
     bdofs = lay.bar_dofs()[drop]
-    bs = bar_state(X[bdofs], lengths[n_c + drop], lay.bar_stiffness[drop], lay.bar_axial_stiffness[drop])
-    n = bs.direction
+    n = bars.direction[drop]
     rate = np.where(
         np.isfinite(lay.bar_stiffness[drop]),
         lay.bar_stiffness[drop],
@@ -143,7 +176,12 @@ def linearise(static: StaticSolution) -> LinearSystem:
     b_row = np.hstack([-n, n])  # Δl = b_row · (u_a, u_b)
     assert state.cable_stiffness is not None and state.bar_stiffness is not None
     bar_stiffness = state.bar_stiffness.copy()
-    bar_stiffness[drop] = rate[:, None, None] * b_row[:, :, None] * b_row[:, None, :]
+    if options.dropper_geometric_stiffness == "excluded":
+        # The droppers' axial springs only (module docstring).
+        bar_stiffness[drop] = rate[:, None, None] * b_row[:, :, None] * b_row[:, None, :]
+    if transverse:  # stitch wires at their static force too: the geometric part of their tangent only
+        stitch = lay.bar_kind != DROPPER
+        bar_stiffness[stitch] = geometric_tangent(bars)[stitch]
     springs = np.zeros(n_all)
     springs[lay.node_dof[lay.messenger_supports] + 1] += c.supports.messenger_stiffness
     springs[lay.node_dof[lay.contact_supports] + 1] += c.supports.steady_arm_stiffness
@@ -154,6 +192,15 @@ def linearise(static: StaticSolution) -> LinearSystem:
     # Drop the stored zeros (the x-z couplings of the mass blocks): the time loop reads every entry.
     K.eliminate_zeros()
     M.eliminate_zeros()
+    C = None
+    if options.rayleigh_damping_scope == "wires-only":
+        # The wires' (and stitch wires') own mass and tangent: no droppers, springs or point masses.
+        wire = (lay.bar_kind != DROPPER)[:, None, None]
+        no_points = np.zeros(n_all)
+        C = c.damping.alpha * scatter(cable_mass, bar_mass * wire, no_points) + c.damping.beta * scatter(
+            state.cable_stiffness, bar_stiffness * wire, no_points
+        )
+        C.eliminate_zeros()
 
     rows = np.repeat(np.arange(drop.size), 4)
     cols = index[bdofs].ravel()
@@ -179,4 +226,6 @@ def linearise(static: StaticSolution) -> LinearSystem:
         dropper_force=static.dropper_forces.copy(),
         contact_wire=geometry,
         support_z=index[lay.node_dof[lay.contact_supports] + 1],
+        damping_matrix=C,
+        slack_dropper_damping=options.slack_dropper_damping == "stiffness-proportional",
     )

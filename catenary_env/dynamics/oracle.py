@@ -7,6 +7,11 @@ droppers removed with their damping) and solves it with a sparse direct solver, 
 the states are consistent: Newton's method on the piecewise-linear problem. No superposition, no
 pre-computed responses, no factorisation reused between steps. Slow by design; use it on short
 sections only.
+
+It takes the system's damping matrix as it is, so it also integrates the modelling choices the fast
+loops do not (:attr:`~catenary_env.dynamics.linear_system.LinearSystem.rayleigh`): Rayleigh damping over
+the wires only, and slack droppers that keep their damping (only their spring force is removed, and
+slackness is judged on it).
 """
 
 from __future__ import annotations
@@ -39,6 +44,8 @@ def simulate_passage_reference(
     C = system.damping
     B = system.dropper_elongation.tocsr()
     rate, N0, beta = system.dropper_rate, system.dropper_force, system.beta
+    # The damping share a slack dropper drops with its spring: β k, or none where it keeps its damping.
+    beta_slack = 0.0 if system.slack_dropper_damping else beta
     pm = pantograph_matrices(pantograph)
     head = pm.head
     n, n_p = system.n_dofs, pm.mass.shape[0]
@@ -80,18 +87,21 @@ def simulate_passage_reference(
             r = rhs.copy()
             if contact:
                 # f = kh (y_head - wire_z - N u), acting up on the wire and down on the head.
-                matrix = matrix + kh * sp.csr_matrix(np.outer(N_row, N_row))
+                on = np.flatnonzero(N_row)
+                outer = np.outer(N_row[on], N_row[on]).ravel()
+                rows, cols = np.repeat(on, on.size), np.tile(on, on.size)
+                matrix = matrix + kh * sp.csr_matrix((outer, (rows, cols)), shape=matrix.shape)
                 r += kh * (-wire_z[k]) * N_row
             if np.any(slack):
                 Bs = B[slack]
-                k_s = rate[slack] * (1.0 + beta * nm.a1)
+                k_s = rate[slack] * (1.0 + beta_slack * nm.a1)
                 extra = sp.csr_matrix(Bs.T @ sp.diags(k_s) @ Bs)
                 matrix = matrix - sp.block_diag([extra, sp.csr_matrix((n_p, n_p))])
-                r[:n] += Bs.T @ (N0[slack] - beta * rate[slack] * velocity_part[slack])
+                r[:n] += Bs.T @ (N0[slack] - beta_slack * rate[slack] * velocity_part[slack])
             U_new = spla.spsolve(matrix.tocsc(), r)
             gap = -(N_row @ U_new) - wire_z[k]
             elongation = B @ U_new[:n]
-            elastic = N0 + rate * ((1.0 + beta * nm.a1) * elongation - beta * velocity_part)
+            elastic = N0 + rate * ((1.0 + beta_slack * nm.a1) * elongation - beta_slack * velocity_part)
             new_contact, new_slack = bool(gap > 0.0), elastic < 0.0
             if new_contact == contact and np.array_equal(new_slack, slack):
                 resolved = True

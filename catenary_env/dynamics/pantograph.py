@@ -5,6 +5,10 @@ Coordinates y are the masses' heights above the contact wire's nominal height at
 spring takes part of the uplift force, so the mean contact force is the uplift less k₀ times the mean frame
 height (docs/model.md, 'Pantograph and contact'). The masses' own weight is carried by the static uplift
 force, as in EN 50318's reference model, and does not appear.
+
+The modelling choice ``uplift_definition = "static-contact"`` reads the uplift force as the static contact
+force instead: the frame spring is relaxed where the pantograph stands at static equilibrium on the wire.
+The passages keep the coordinates above; :func:`frame_force` gives the force on the frame that realises it.
 """
 
 from __future__ import annotations
@@ -12,8 +16,10 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+import scipy.sparse.linalg as spla
 
 from ..model.definition import PantographDefinition
+from .linear_system import LinearSystem
 
 
 class PantographMatrices(NamedTuple):
@@ -59,3 +65,43 @@ def static_contact(
     rhs[h] += contact_stiffness * wire_height
     y = np.linalg.solve(A, rhs)
     return y, contact_stiffness * (y[h] - wire_height)
+
+
+STATIC_POINTS = 24
+"""Equally spaced pantograph positions over a span at which the static contact force is averaged."""
+
+
+def frame_force(system: LinearSystem, pantograph: PantographDefinition, uplift_force: float) -> float:
+    """The force on the frame (N), spring relaxed at the nominal height, that realises ``uplift_force`` (N).
+
+    With ``uplift_definition = "nominal-height"`` that is ``uplift_force`` itself. With ``"static-contact"``
+    it is the force for which the static contact force, averaged over the positions of the central span,
+    equals ``uplift_force``: the frame spring is then relaxed at the frame's mean static height y_r, and
+    F₀ + k₀ y_r is applied. At position x the static contact force is
+
+        f(x) = (F - k₀ z₀(x)) / (1 + k₀ s(x)),    s(x) = c(x) + 1/k_h + Σ_{i>0} 1/k_i,
+
+    with F the force on the frame, z₀ the static contact-wire height above nominal, c the catenary's static
+    compliance under the pantograph (every dropper taut) and k_i the chain's upper springs; F follows from
+    mean f = ``uplift_force``.
+    """
+    options = system.static.layout.catenary.modelling
+    k0 = pantograph.stiffnesses[0]
+    if options.uplift_definition == "nominal-height" or k0 == 0.0:
+        return uplift_force
+    lay = system.static.layout
+    span = lay.n_spans // 2
+    x = lay.span_length * (span + np.arange(STATIC_POINTS) / STATIC_POINTS)
+    element, shape, height = system.contact_wire.locate(x)
+    dofs = system.contact_wire.z_dofs[element]  # (P, 4): the contact wire's vertical coordinates are free
+    points = np.broadcast_to(np.arange(x.size)[:, None], dofs.shape)
+    loads = np.zeros((system.n_dofs, x.size))
+    np.add.at(loads, (dofs, points), shape)
+    response = spla.splu(system.stiffness.tocsc()).solve(loads)
+    compliance = np.einsum("pk,pk->p", shape, response[dofs, points])
+    series = (
+        compliance + 1.0 / lay.catenary.contact_stiffness + sum(1.0 / k for k in pantograph.stiffnesses[1:])
+    )
+    z0 = height - lay.catenary.contact_wire_height
+    share = 1.0 / (1.0 + k0 * series)
+    return float((uplift_force + k0 * np.mean(z0 * share)) / np.mean(share))

@@ -115,6 +115,7 @@ def cable_state(
     bending_stiffness: np.ndarray,
     tangent: bool = True,
     dlength: bool = False,
+    axial_material: bool = True,
 ) -> CableState:
     """Internal forces, tangent stiffness and length derivative of cable elements.
 
@@ -137,6 +138,11 @@ def cable_state(
         EA (N) and EI (N·m²).
     tangent, dlength : bool
         Whether to return the stiffness and the length derivative.
+    axial_material : bool
+        False leaves the axial material stiffness EA t tᵀ out of the tangent, keeping the geometric
+        stiffness of the axial force N (I - t tᵀ) / |r_s| and the bending terms: the tangent of a wire
+        whose axial force does not change (the transverse-only linearisation, docs/model.md, 'Modelling
+        choices').
     """
     # Arrays keep the element axis last, so that every elementwise operation runs over all
     # elements at once; per Gauss point vectors have shape (G, 2, E).
@@ -169,7 +175,8 @@ def cable_state(
         # ∇²W in blocks (r_s, L r_ss) x (r_s, L r_ss), times the L of ds: hessian[g, i, j, a, b, e].
         hessian = np.empty((GAUSS_W.size, 2, 2, 2, 2, n_el))
         axial = ea * eps / nrm  # ∂²(½ EA ε²)/∂r_s² = EA t tᵀ + EA ε / |r_s| (I - t tᵀ)
-        h = _outer(t * (ea - axial)[:, None], t) + _outer(p * ei, p)
+        material = ea if axial_material else 0.0
+        h = _outer(t * (material - axial)[:, None], t) + _outer(p * ei, p)
         h[:, 0, 0] += axial
         h[:, 1, 1] += axial
         hessian[:, 0, 0] = h * L

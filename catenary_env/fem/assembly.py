@@ -152,6 +152,7 @@ def assemble(
     tangent: bool = True,
     dlength: bool = False,
     tension_only: bool = False,
+    axial_material: bool = True,
 ) -> Assembled:
     """Internal forces minus gravity, with optional tangent and length derivative.
 
@@ -164,6 +165,9 @@ def assemble(
     tension_only : bool
         Droppers in compression carry nothing (slack), as in the real catenary; shape-finding uses
         False so that a compressed dropper shows as a negative force (an infeasible design).
+    axial_material : bool
+        False leaves the wires' axial material stiffness out of their tangent (see
+        :func:`~catenary_env.fem.ancf.cable_state`).
     """
     n = layout.n_dofs
     n_c = layout.cable_nodes.shape[0]
@@ -171,7 +175,13 @@ def assemble(
     bdofs = layout.bar_dofs()
     Lc, Lb = lengths[:n_c], lengths[n_c:]
     cs = cable_state(
-        X[cdofs], Lc, layout.cable_axial_stiffness, layout.cable_bending_stiffness, tangent, dlength
+        X[cdofs],
+        Lc,
+        layout.cable_axial_stiffness,
+        layout.cable_bending_stiffness,
+        tangent,
+        dlength,
+        axial_material,
     )
     bs = bar_state(X[bdofs], Lb, layout.bar_stiffness, layout.bar_axial_stiffness)
     g_c, dg_c = gravity_load(Lc, layout.cable_linear_mass * GRAVITY)

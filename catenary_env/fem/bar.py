@@ -77,6 +77,18 @@ def bar_state(
     return BarState(N, length, n, force, stiff, force_dlength)
 
 
+def geometric_tangent(state: BarState) -> np.ndarray:
+    """The geometric part (N / l)(I - n nᵀ) of the bars' tangent, N/m; shape (E, 4, 4).
+
+    It acts across the bar; the rest of :attr:`BarState.stiffness` is the material part k n nᵀ.
+    """
+    n = state.direction
+    block = (state.axial_force / state.length)[:, None, None] * (
+        np.eye(2)[None] - n[:, :, None] * n[:, None, :]
+    )
+    return np.block([[block, -block], [-block, block]])
+
+
 def bar_mass_matrix(reference_length: np.ndarray, linear_mass: np.ndarray) -> np.ndarray:
     """Consistent mass matrices of linear bars, ρ L / 6 [[2, 1], [1, 2]] ⊗ I₂, kg; shape (E, 4, 4)."""
     m = linear_mass * reference_length / 6.0

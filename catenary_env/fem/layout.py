@@ -10,7 +10,15 @@ kilonewton) kinks it, by a few hundredths of a radian, over the bending length s
 cubic (C¹) element cannot bend that sharply across one node; it spreads the kink over the adjacent
 elements, which then carry a spurious axial-strain swing and shift the dropper lengths by millimetres
 at a 1 m mesh. So the messenger's node at an interior support is a hinge: one position, and a
-separate position gradient for each side (6 coordinates).
+separate position gradient for each side (6 coordinates). The modelling choice
+``messenger_support = "continuous"`` keeps one gradient there instead, and resolves the bend: the
+messenger gets nodes at 0.5, 1, 2 and 4 bending lengths on each side of the support, which brings the
+dropper lengths within a few tenths of a millimetre of a uniform 5 cm mesh (docs/model.md, 'Modelling
+choices').
+
+Dropper clamps and steady arms are point masses at their nodes, or, with ``clamp_masses = "distributed"``,
+spread along the wire they sit on: each span's clamps and one steady arm add their mass per metre of span to
+the contact wire and the messenger.
 
 Stitch wires hang at the interior supports only; at the two end supports of the section the first
 dropper hangs from the messenger. Only the end spans, outside the analysis section, see this.
@@ -25,6 +33,10 @@ import numpy as np
 
 from ..model.definition import CatenaryDefinition
 from ..model.design import Design
+
+BENDING_LAYER = (0.5, 1.0, 2.0, 4.0)
+"""Distances from an interior support, in bending lengths √(EI/T), of the nodes that resolve a continuous
+messenger's bend over the support."""
 
 CONTACT, MESSENGER, STITCH = 0, 1, 2
 """Node kinds."""
@@ -128,6 +140,16 @@ class Layout:
         start = self.node_dof[self.bar_nodes]
         return (start[:, :, None] + np.arange(2)[None, None, :]).reshape(-1, 4)
 
+    def axial_coordinates(self) -> np.ndarray:
+        """Mask (n_dofs,) of the coordinates along the track: x and each x' of a wire node, x of a stitch one.
+
+        A node's coordinates alternate x-like and z-like: (x, z), (x, z, x', z') or, at a hinge,
+        (x, z, x', z', x', z').
+        """
+        nodes = np.arange(self.node_x.size)
+        node = np.repeat(nodes, self.node_size(nodes))
+        return (np.arange(self.n_dofs) - self.node_dof[node]) % 2 == 0
+
     def x_dof(self, nodes: np.ndarray) -> np.ndarray:
         return self.node_dof[nodes]
 
@@ -152,6 +174,15 @@ def _find(node_x: np.ndarray, nodes: np.ndarray, x: np.ndarray) -> np.ndarray:
     if np.any(np.abs(at[i] - x) > 1e-6):
         raise ValueError("layout: no node at a key position")  # a bug, never a user error
     return nodes[i]
+
+
+def _bending_layer(supports: np.ndarray, catenary: CatenaryDefinition, room: float) -> np.ndarray:
+    """Messenger node positions of :data:`BENDING_LAYER` around each support, those within half of
+    ``room`` (m, the distance to the nearest dropper) only."""
+    wire = catenary.messenger_wire
+    offsets = math.sqrt(wire.bending_stiffness / wire.tension) * np.array(BENDING_LAYER)
+    offsets = offsets[(offsets > 0.0) & (offsets < 0.5 * room)]
+    return (supports[:, None] + np.r_[-offsets, offsets]).ravel()
 
 
 def build_layout(
@@ -183,6 +214,8 @@ def build_layout(
     interior = support_x[1:-1]
     cw_points = _subdivide(np.r_[support_x, dropper_x], contact_wire_element)
     mw_keys = np.r_[support_x, dropper_x[~on_stitch]]
+    if c.modelling.messenger_support == "continuous":
+        mw_keys = np.r_[mw_keys, _bending_layer(interior, c, min(d[0], L - d[-1]))]
     if stitch is not None:
         mw_keys = np.r_[mw_keys, (interior[:, None] + [-half, half]).ravel()]
     mw_points = _subdivide(mw_keys, messenger_wire_element)
@@ -198,7 +231,8 @@ def build_layout(
     cw_nodes, mw_nodes, st_nodes = (
         np.flatnonzero(node_kind == kind) for kind in (CONTACT, MESSENGER, STITCH)
     )
-    hinges = _find(node_x, mw_nodes, interior)
+    options = c.modelling
+    hinges = _find(node_x, mw_nodes, interior) if options.messenger_support == "hinge" else np.zeros(0, int)
     sizes = np.where(node_kind == STITCH, 2, 4)
     sizes[hinges] = 6
     node_dof = np.concatenate([[0], np.cumsum(sizes)[:-1]])
@@ -209,6 +243,15 @@ def build_layout(
     def per_cable(attr: str) -> np.ndarray:
         return np.where(
             cable_wire == CONTACT, float(getattr(c.contact_wire, attr)), getattr(c.messenger_wire, attr)
+        )
+
+    cable_linear_mass = per_cable("linear_mass")
+    distributed = options.clamp_masses == "distributed"
+    if distributed:  # a span's clamps, and one steady arm, per metre of span
+        cable_linear_mass += np.where(
+            cable_wire == CONTACT,
+            (n_d * c.dropper.clamp_mass_contact + c.supports.steady_arm_mass) / L,
+            n_d * c.dropper.clamp_mass_messenger / L,
         )
 
     # Bars: the droppers (top, bottom) in dropper order, then three bars per stitch wire.
@@ -250,10 +293,11 @@ def build_layout(
     mw_supports = _find(node_x, mw_nodes, support_x)
     cw_supports = _find(node_x, cw_nodes, support_x)
     mass_nodes = np.r_[bars[drop, 0], bars[drop, 1], cw_supports, mw_supports]
+    point = 0.0 if distributed else 1.0  # distributed clamps and steady arms are in the wires' mass
     mass_values = np.r_[
-        np.full(drop.size, c.dropper.clamp_mass_messenger),
-        np.full(drop.size, c.dropper.clamp_mass_contact),
-        np.full(cw_supports.size, c.supports.steady_arm_mass),
+        np.full(drop.size, point * c.dropper.clamp_mass_messenger),
+        np.full(drop.size, point * c.dropper.clamp_mass_contact),
+        np.full(cw_supports.size, point * c.supports.steady_arm_mass),
         np.full(mw_supports.size, c.supports.messenger_mass),
     ]
     return Layout(
@@ -269,7 +313,7 @@ def build_layout(
         cable_wire=cable_wire,
         cable_axial_stiffness=per_cable("axial_stiffness"),
         cable_bending_stiffness=per_cable("bending_stiffness"),
-        cable_linear_mass=per_cable("linear_mass"),
+        cable_linear_mass=cable_linear_mass,
         bar_nodes=bars,
         bar_kind=bar_kind,
         bar_stiffness=bar_k,

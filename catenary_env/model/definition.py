@@ -13,6 +13,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from .options import CHOICES, ModellingOptions
+
 
 class DefinitionError(ValueError):
     """An invalid catenary or pantograph definition; the message names the field and the allowed range."""
@@ -224,6 +226,9 @@ class CatenaryDefinition:
         Default number of central spans over which statistics are taken.
     pantograph : str
         Name of the default pantograph preset.
+    modelling : ModellingOptions
+        The modelling choices (the optional ``[modelling]`` table of a preset; docs/model.md, 'Modelling
+        choices').
     provenance : dict
         Source tag of figures, keyed by dotted field name (``"contact_wire.axial_stiffness"``):
         ``S`` standard data, ``S?`` single source, ``A`` assumption (see docs/model.md, 'Data and sources').
@@ -244,10 +249,19 @@ class CatenaryDefinition:
     n_spans: int = 20
     analysis_spans: int = 10
     pantograph: str = ""
+    modelling: ModellingOptions = field(default_factory=ModellingOptions)
     provenance: dict[str, str] = field(default_factory=dict, compare=False, hash=False)
 
     def __post_init__(self) -> None:
         where = f"catenary '{self.name}'"
+        if not isinstance(self.modelling, ModellingOptions):
+            raise DefinitionError(f"{where}.modelling: expected a ModellingOptions record")
+        bad = self.modelling.invalid()
+        if bad is not None:
+            name, value = bad
+            raise DefinitionError(
+                f"{where}.modelling.{name} = {value!r}: must be one of {', '.join(map(repr, CHOICES[name]))}"
+            )
         _check_positive(where, "span_length", self.span_length)
         if self.span_length > MAX_SPAN_LENGTH:
             raise DefinitionError(
