@@ -78,7 +78,7 @@ class ReducedArrays(NamedTuple):
     schur_columns: np.ndarray  # (C, n_b, w) the Cholesky factor U of S by columns (_band_solve)
     schur_rows: np.ndarray  # (C, n_b, w) U by rows
     schur_inverse_diagonal: np.ndarray  # (C, n_b)
-    interface_rhs_band: np.ndarray  # (C, 2 w + 1, n_b) Y[r, r + k] at [w + k, r]
+    interface_rhs_rows: np.ndarray  # (C, n_b, 2 w + 1) Y[r, r + k] at [r, w + k]
     dropper_span: np.ndarray  # (D,) in order of span
     dropper_start: np.ndarray  # (S + 1,) span s's droppers are dropper_start[s] .. dropper_start[s + 1] - 1
     dropper_q: np.ndarray  # (D, m) B_q D⁻¹
@@ -99,7 +99,7 @@ class ReducedArrays(NamedTuple):
     element_modal_compliance: np.ndarray  # (E, 4, 4) rows_q D⁻¹ rows_qᵀ
     element_dropper_modal: np.ndarray  # (E, 4, K) rows_q D⁻¹ B_qᵀ for the span's droppers
     element_interface: np.ndarray  # (C, n_c, n_b) S⁻¹ at span c's coupled interface DOFs
-    dropper_element_interface: np.ndarray  # (C, D, n_c) (B_c - c_m H) S⁻¹ there
+    dropper_element_interface: np.ndarray  # (C, n_c, D) (B_c - c_m H) S⁻¹ there
     support: np.ndarray  # (supports,) interface position of each contact-wire support
     coefficients: np.ndarray  # (16,) e1..e3, g1..g3, a0..a5, k_h, β, c_m, 1 / c_k
     config: np.ndarray  # (steps,) the pantograph's span (its contact-wire element's)
@@ -202,51 +202,39 @@ def _element_rows(d, e, rows_q, rows_c):  # pragma: no cover - compiled
 
 @njit(cache=True, fastmath=FAST)
 def _element_responses(d, c, e, rows_c, p_b, comp, g_modal, g_full, mq, forces):  # pragma: no cover
-    """A unit force at each of the element's 4 DOFs: interface response p_b (n_b, 4), compliance
-    (4, 4) with the residual, the droppers' elongations, of the kept modes and with the residual, and
-    mq = rows_q D⁻¹ M_qc (4, n_c). The element lies in the pantograph's span c, which keeps all its
-    modes: its interface forces F = rows_c - c_m mq act at span c's coupled DOFs, whose S⁻¹ columns
-    and droppers' responses the configuration holds."""
+    """A unit force at each of the element's 4 DOFs: interface response p_b (4, n_b), compliance
+    (4, 4) with the residual, the droppers' elongations (4, D), of the kept modes and with the
+    residual, and mq = rows_q D⁻¹ M_qc (4, n_c). The element lies in the pantograph's span c, which
+    keeps all its modes: its interface forces F = rows_c - c_m mq act at span c's coupled DOFs,
+    whose S⁻¹ columns and droppers' responses the configuration holds."""
     c_m = d.coefficients[MASS_FACTOR]
     s = d.element_span[e]
     t = d.span_type[s]
     nc = d.n_coupled[t]
-    n_b = p_b.shape[0]
     for r in range(4):
         local = d.element_local[e, r]
         for j in range(nc):
             mq[r, j] = d.shape_coupling[t, local, j] if local >= 0 else 0.0
-            forces[j, r] = rows_c[r, j] - c_m * mq[r, j]
+            forces[r, j] = rows_c[r, j] - c_m * mq[r, j]
     p_b[:] = 0.0
-    columns = d.element_interface[c]
-    for j in range(nc):
-        column = columns[j]
-        fj = forces[j]
-        for i in range(n_b):
-            row = p_b[i]
-            for r in range(4):
-                row[r] += column[i] * fj[r]
+    g_modal[:] = 0.0
+    for r in range(4):
+        for j in range(nc):
+            _axpy(d.element_interface[c, j], forces[r, j], p_b[r], p_b.shape[1])
+            _axpy(d.dropper_element_interface[c, j], forces[r, j], g_modal[r], g_modal.shape[1])
     for r in range(4):  # rows_q D⁻¹ rows_qᵀ + residual + (rows_c - c_m rows_q D⁻¹ M_qc) p_c
         for col in range(4):
             acc = d.element_compliance[e, r, col] + d.element_modal_compliance[e, r, col]
             for j in range(nc):
-                acc += forces[j, r] * p_b[d.coupled[s, j], col]
+                acc += forces[r, j] * p_b[col, d.coupled[s, j]]
             comp[r, col] = acc
-    at_droppers = d.dropper_element_interface[c]
-    for q in range(d.dropper_force.size):
-        row = at_droppers[q]
-        for col in range(4):
-            acc = 0.0
-            for j in range(nc):
-                acc += row[j] * forces[j, col]
-            g_modal[q, col] = acc
-            g_full[q, col] = acc
+    g_full[:] = g_modal
     for k in range(d.element_droppers.shape[1]):
         q = d.element_droppers[e, k]
         if q >= 0:
             for col in range(4):
-                g_modal[q, col] += d.element_dropper_modal[e, col, k]
-                g_full[q, col] += d.element_dropper_modal[e, col, k] + d.element_dropper_residual[e, col, k]
+                g_modal[col, q] += d.element_dropper_modal[e, col, k]
+                g_full[col, q] += d.element_dropper_modal[e, col, k] + d.element_dropper_residual[e, col, k]
 
 
 @njit(cache=True, fastmath=FAST)
@@ -282,7 +270,8 @@ def _configure(d, st, c):  # pragma: no cover - compiled
 @njit(cache=True, fastmath=FAST)
 def _advance(u, v, acc, e_vec, y, x, cf):  # pragma: no cover - compiled
     """Newmark update of one span's (or the interface's) coordinates to u₁ = x + y / c_k, and the next
-    step's e and y there (1-D views of equal length, so that the loop vectorises)."""
+    step's e and y there (1-D views of equal length, so that the loop vectorises: a seventh array
+    would exceed the compiler's checks for overlapping arrays, and the loop would stay scalar)."""
     e1, e2, e3, g1, g2, g3 = cf[E1], cf[E2], cf[E3], cf[G1], cf[G2], cf[G3]
     a0, a1, a2, a3, a4, a5 = cf[A0], cf[A1], cf[A2], cf[A3], cf[A4], cf[A5]
     inv_ck = cf[INVERSE_STIFFNESS_FACTOR]
@@ -353,21 +342,22 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
     n_p = head + 1
     m_max = d.coupling.shape[2]
     nc_max = d.coupling.shape[1]
-    width = (d.interface_rhs_band.shape[1] - 1) // 2
+    width = (d.interface_rhs_rows.shape[2] - 1) // 2
     u, v, acc_s, e_vec, y = st.u, st.v, st.a, st.e, st.y
     rows_q = np.zeros((4, m_max))
     rows_c = np.zeros((4, nc_max))
-    p_b = np.zeros((n_b, 4))
+    p_b = np.zeros((4, n_b))
     comp = np.zeros((4, 4))
-    g_modal = np.zeros((n_drop, 4))
-    g_full = np.zeros((n_drop, 4))
+    g_modal = np.zeros((4, n_drop))
+    g_full = np.zeros((4, n_drop))
     m_qc = np.zeros((4, nc_max))  # the element's rows_q D⁻¹ M_qc
-    forces = np.zeros((nc_max, 4))  # its interface forces rows_c - c_m rows_q D⁻¹ M_qc
+    forces = np.zeros((4, nc_max))  # its interface forces rows_c - c_m rows_q D⁻¹ M_qc
     work_b = np.zeros(n_b)
+    e_pad = np.zeros(n_b + 2 * width)  # the interface's e between w zeros each side
     x_b = np.zeros(n_b)
     g_c = np.zeros((n_spans, nc_max))  # e_c - c_m x_c of each span's coupled interface DOFs
     x_c = np.zeros((n_spans, nc_max))  # x_c
-    sums = np.zeros(max(nc_max, n_drop))
+    sums = np.zeros(nc_max)  # a span's sums over its coupled interface DOFs
     g_dc = np.zeros(n_drop)
     gm_dc = np.zeros(n_drop)
     dl_known = np.zeros(n_drop)
@@ -376,7 +366,7 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
     lam, idx, elastic = work[2], work[3], work[4]
     y_known = np.zeros(n_p)
     rhs_p = np.zeros(n_p)
-    fq = np.zeros(m_max)
+    fq = np.zeros(m_max)  # a span's modes' right-hand side
     h_q = np.zeros(m_max)  # h rows_q: the contact point's row over its span's modes
     contact = st.flags[CONTACT] != 0
     current = -1
@@ -396,19 +386,10 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
         t_el = d.span_type[s_el]
         flex = d.dropper_flexibility[c]
         # 1. Interface part of K̂⁻¹ M e, and the droppers' modal part of step 2, span by span.
-        band = d.interface_rhs_band[c]
-        e_b = e_vec[n_q:]
-        diag = band[width]
+        band = d.interface_rhs_rows[c]
+        e_pad[width : width + n_b] = e_vec[n_q:]
         for r in range(n_b):
-            work_b[r] = diag[r] * e_b[r]
-        for kk in range(1, width + 1):
-            upper, lower = band[width + kk], band[width - kk, kk:]
-            head_b, tail_b = work_b[: n_b - kk], work_b[kk:]
-            ahead, behind = e_b[kk:], e_b[: n_b - kk]
-            for r in range(n_b - kk):
-                head_b[r] += upper[r] * ahead[r]
-            for r in range(n_b - kk):
-                tail_b[r] += lower[r] * behind[r]
+            work_b[r] = _dot(band[r], e_pad[r:], 2 * width + 1)
         for s in range(n_spans):
             t = d.span_type[s]
             off = d.modal_offset[s]
@@ -419,10 +400,7 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
             for j in range(nc):
                 work_b[d.coupled[s, j]] += sums[j]
             first_q = d.dropper_start[s]
-            n_s = d.dropper_start[s + 1] - first_q
-            _rows_dot(d.dropper_q, first_q, n_s, e_s, m, sums)
-            for j in range(n_s):
-                dl_known[first_q + j] = sums[j]
+            _rows_dot(d.dropper_q, first_q, d.dropper_start[s + 1] - first_q, e_s, m, dl_known[first_q:])
         _band_solve((d.schur_columns[c], d.schur_rows[c], d.schur_inverse_diagonal[c]), work_b, x_b)
         for s in range(n_spans):
             t = d.span_type[s]
@@ -459,9 +437,9 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
             for cc in range(4):
                 c_cc += h[r] * comp[r, cc] * h[cc]
         for q in range(n_drop):
-            g_dc[q] = g_full[q, 0] * h[0] + g_full[q, 1] * h[1] + g_full[q, 2] * h[2] + g_full[q, 3] * h[3]
+            g_dc[q] = g_full[0, q] * h[0] + g_full[1, q] * h[1] + g_full[2, q] * h[2] + g_full[3, q] * h[3]
             gm_dc[q] = (
-                g_modal[q, 0] * h[0] + g_modal[q, 1] * h[1] + g_modal[q, 2] * h[2] + g_modal[q, 3] * h[3]
+                g_modal[0, q] * h[0] + g_modal[1, q] * h[1] + g_modal[2, q] * h[2] + g_modal[3, q] * h[3]
             )
         # 3. Contact force and slack droppers.
         contact, f, n_slack, resolved = _settle(
@@ -481,15 +459,16 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
         st.flags[UNRESOLVED] += 0 if resolved else 1
         # 4. Their interface response, then every span's modes with the Newmark update.
         for i in range(n_b):
-            x_b[i] += f * (p_b[i, 0] * h[0] + p_b[i, 1] * h[1] + p_b[i, 2] * h[2] + p_b[i, 3] * h[3])
+            x_b[i] += f * (p_b[0, i] * h[0] + p_b[1, i] * h[1] + p_b[2, i] * h[2] + p_b[3, i] * h[3])
         for qq in range(n_slack):
             for i in range(n_b):
                 x_b[i] += lam[qq] * d.dropper_interface[c, idx[qq], i]
-        for s in range(n_spans):
+        for s in range(n_spans):  # x_q = D⁻¹ (e_q + F_q + M_qc (e_c - c_m x_c)), then Newmark
             t = d.span_type[s]
             off = d.modal_offset[s]
             m = d.kept[c, s]
-            e_s = e_vec[off : off + m]
+            end = off + m
+            e_s = e_vec[off:end]
             for i in range(m):
                 fq[i] = e_s[i]
             if s == s_el:
@@ -504,7 +483,6 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
             inv_d = d.inverse_diagonal[t]
             for i in range(m):
                 fq[i] *= inv_d[i]
-            end = off + m
             _advance(u[off:end], v[off:end], acc_s[off:end], e_s, y[off:end], fq, cf)
         _advance(u[n_q:], v[n_q:], acc_s[n_q:], e_vec[n_q:], y[n_q:], x_b, cf)
         mflex = d.dropper_modal_flexibility[c]

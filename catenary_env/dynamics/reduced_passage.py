@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
+from numpy.lib.stride_tricks import sliding_window_view
 
 from ..model.definition import PantographDefinition
 from .active_set import settle
@@ -259,13 +260,13 @@ def _configurations(
         schur_columns=np.zeros((n_spans, n_b, width)),
         schur_rows=np.zeros((n_spans, n_b, width)),
         schur_inverse_diagonal=np.zeros((n_spans, n_b)),
-        interface_rhs_band=np.zeros((n_spans, 2 * width + 1, n_b)),
+        interface_rhs_rows=np.zeros((n_spans, n_b, 2 * width + 1)),
         dropper_h=np.zeros((n_spans, n_drop, nc_max)),
         dropper_interface=np.zeros((n_spans, n_drop, n_b)),
         dropper_flexibility=np.zeros((n_spans, n_drop, n_drop)),
         dropper_modal_flexibility=np.zeros((n_spans, n_drop, n_drop)),
         element_interface=np.zeros((n_spans, nc_max, n_b)),
-        dropper_element_interface=np.zeros((n_spans, n_drop, nc_max)),
+        dropper_element_interface=np.zeros((n_spans, nc_max, n_drop)),
     )
     # A span's share of Σ M_cq D⁻¹ M_qc, of the droppers' G and of the residual, per mode count kept.
     span_sum, modal_block, residual_block = {}, {}, {}
@@ -290,7 +291,7 @@ def _configurations(
         out["schur_columns"][p], out["schur_rows"][p], out["schur_inverse_diagonal"][p] = band_rows(factor)
         Y = reduced.interface_mass - c_m * sum_coupling
         for k in range(-width, width + 1):
-            out["interface_rhs_band"][p, width + k, max(0, -k) : n_b - max(0, k)] = np.diagonal(Y, k)
+            out["interface_rhs_rows"][p, max(0, -k) : n_b - max(0, k), width + k] = np.diagonal(Y, k)
         for s in range(n_spans):
             q = np.flatnonzero(d_span == s)
             k = kept[p, s]
@@ -303,7 +304,7 @@ def _configurations(
         X = sla.cho_solve_banded((factor, False), np.c_[H.T, unit], check_finite=False)
         X, out["element_interface"][p, : own.size] = X[:, :n_drop], X[:, n_drop:].T
         out["dropper_interface"][p] = X.T
-        out["dropper_element_interface"][p, :, : own.size] = X.T[:, own]
+        out["dropper_element_interface"][p, : own.size] = X[own]
         G = H @ X
         G_full = G.copy()
         for s in range(n_spans):
@@ -597,7 +598,7 @@ def _run_numpy(d: _Arrays, st: _Arrays, progress: Callable[[float], None] | None
     n_spans = d.span_type.size
     n_q = d.modal_offset[-1]
     head = d.y_star.size - 1
-    width = (d.interface_rhs_band.shape[1] - 1) // 2
+    width = (d.interface_rhs_rows.shape[2] - 1) // 2
     n_steps = d.element.size
     kappa, N0 = d.dropper_kappa, d.dropper_force
     contact = bool(st.flags[0])
@@ -632,12 +633,8 @@ def _run_numpy(d: _Arrays, st: _Arrays, progress: Callable[[float], None] | None
         s_el = d.element_span[el]
         kept = d.kept[c]
         # 1. Interface part of K̂⁻¹ M e.
-        band = d.interface_rhs_band[c]
-        e_b = e_vec[n_q:]
-        z = band[width] * e_b
-        for kk in range(1, width + 1):
-            z[:-kk] += band[width + kk, :-kk] * e_b[kk:]
-            z[kk:] += band[width - kk, kk:] * e_b[:-kk]
+        e_b = np.pad(e_vec[n_q:], width)
+        z = np.einsum("rk,rk->r", d.interface_rhs_rows[c], sliding_window_view(e_b, 2 * width + 1))
         for s, t, off, cpl in spans:
             m = kept[s]
             z[cpl] += d.coupling[t, : cpl.size, :m] @ (d.weight[t, :m] * e_vec[off : off + m])
