@@ -12,12 +12,15 @@ import dataclasses
 import numpy as np
 import pytest
 
+from catenary_env.dynamics import span_modes
 from catenary_env.dynamics.linear_system import linearise
 from catenary_env.dynamics.passage import simulate_passage
 from catenary_env.dynamics.reduced_passage import prepare_reduced_passage, simulate_reduced_passage
 from catenary_env.dynamics.span_modes import reduce_system, reduced_matrices
-from catenary_env.model.design import DesignError, level_design
+from catenary_env.fem.layout import build_layout
+from catenary_env.model.design import Design, DesignError, level_design
 from catenary_env.pipeline import FIDELITIES, Fidelity, check_fidelity, evaluate
+from catenary_env.statics.shape_finding import find_shape
 
 SPEED = 300 / 3.6
 DT = 2e-3
@@ -152,3 +155,96 @@ def test_evaluation_stops_one_span_after_the_analysis_section_without_changing_i
     assert short.trajectory.position[-1] == pytest.approx(6 * benchmark_catenary.span_length, abs=1.0)
     for name, value in whole.statistics.as_dict().items():
         assert getattr(short.statistics, name) == pytest.approx(value, rel=1e-6, abs=1e-9), name
+
+
+# Speed-ups that must not change the model (docs/performance.md, 'Speed'): mirror images of spans,
+# the residual from the truncated eigenpairs, sparse blocks gathered by hand.
+
+
+def _plain(monkeypatch, system, *args):
+    """reduce_system with every span's eigenproblem solved as it is (no mirror images)."""
+    with monkeypatch.context() as patch:
+        patch.setattr(span_modes, "find_mirror", lambda *a, **k: None)
+        return reduce_system(system, *args)
+
+
+def test_mirror_images_give_the_same_modes(system, monkeypatch):
+    mirrors = []
+    found = span_modes.find_mirror
+
+    def spy(*args):
+        mirrors.append((args[1] is args[2], found(*args) is not None))
+        return found(*args)
+
+    monkeypatch.setattr(span_modes, "find_mirror", spy)
+    mirrored = reduce_system(system, 300.0, 50.0)
+    monkeypatch.undo()
+    # the interior span is its own mirror image, the last span the first one's
+    assert (True, True) in mirrors and (False, True) in mirrors
+    plain = _plain(monkeypatch, system, 300.0, 50.0)
+    assert mirrored.span_type.tolist() == plain.span_type.tolist()
+    for a, b in zip(plain.types, mirrored.types, strict=True):
+        assert a.n_modes == b.n_modes and a.far_modes == b.far_modes
+        assert np.allclose(a.omega2, b.omega2, rtol=1e-10, atol=0.0)
+        # the same subspace: Φ_aᵀ M Φ_b is orthogonal
+        overlap = np.linalg.svd(a.shapes.T @ a.mass_internal @ b.shapes, compute_uv=False)
+        assert np.allclose(overlap, 1.0, atol=1e-9)
+        assert np.allclose(b.shapes.T @ b.mass_internal @ b.shapes, np.eye(b.n_modes), atol=1e-9)
+        assert np.allclose(a.truncated_omega2, b.truncated_omega2, rtol=1e-10, atol=0.0)
+
+
+def test_the_passage_with_mirrored_modes_equals_the_plain_one(
+    system, monkeypatch, benchmark_pantograph_definition
+):
+    runs = []
+    for reduced in (reduce_system(system, 300.0, 50.0), _plain(monkeypatch, system, 300.0, 50.0)):
+        prepared = prepare_reduced_passage(reduced, DT, near_spans=1)
+        runs.append(
+            simulate_reduced_passage(prepared, benchmark_pantograph_definition, 190.0, SPEED, backend="numpy")
+        )
+    a, b = runs
+    assert a.slack_steps == b.slack_steps > 50
+    # rounding only: the numpy and the compiled loops differ by as much
+    assert np.abs(a.contact_force - b.contact_force).max() < 1e-6
+    assert np.std(a.contact_force) == pytest.approx(np.std(b.contact_force), rel=1e-9)
+
+
+def _own_mirror(system, span):
+    internal, b, coupled = span_modes.split_spans(system)
+    dofs = internal[span]
+    rows = tuple(
+        span_modes.submatrix(x.tocsr(), dofs, np.r_[dofs, b[coupled[span]]])
+        for x in (system.stiffness, system.mass)
+    )
+    dense = tuple(x[:, : dofs.size].toarray() for x in rows)
+    axis = (span + 0.5) * system.static.layout.span_length
+    return span_modes.find_mirror(system, dofs, dofs, axis, dense, rows)
+
+
+def test_a_span_that_is_not_symmetric_is_not_mirrored(system, benchmark_catenary):
+    assert _own_mirror(system, 2) is not None  # the level design's interior span is symmetric
+    design = level_design(benchmark_catenary)
+    shifted = np.array(design.dropper_positions) + np.linspace(0.0, 0.5, design.n_droppers)
+    layout = build_layout(
+        benchmark_catenary, Design(tuple(shifted), design.contact_wire_offsets), 5, 1.0, 2.0
+    )
+    assert _own_mirror(linearise(find_shape(layout)), 2) is None
+
+
+def test_residual_from_the_truncated_eigenpairs_is_the_inverse_less_the_kept_modes(system):
+    reduced = reduce_system(system, 300.0, 50.0)
+    modes = reduced.types[1]
+    c_k, c_m = 1.3, 4.0e6
+    effective = c_k * modes.stiffness_internal + c_m * modes.mass_internal
+    phi = modes.shapes / np.sqrt(c_k * modes.omega2 + c_m)
+    rest = modes.truncated_shapes / np.sqrt(c_k * modes.truncated_omega2 + c_m)
+    inverse = np.linalg.inv(effective)
+    assert np.abs(rest @ rest.T - (inverse - phi @ phi.T)).max() < 1e-9 * np.abs(inverse).max()
+
+
+def test_submatrix_equals_scipy_indexing(system):
+    K = system.stiffness.tocsr()
+    rng = np.random.default_rng(3)
+    rows = np.sort(rng.choice(system.n_dofs, 40, replace=False))
+    cols = rng.permutation(system.n_dofs)[:300]
+    assert np.array_equal(span_modes.submatrix(K, rows, cols).toarray(), K[rows][:, cols].toarray())

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
 from numpy.lib.stride_tricks import sliding_window_view
 
 from ..model.definition import PantographDefinition
@@ -41,7 +42,7 @@ from .active_set import settle
 from .history import PassageHistory
 from .newmark import NewmarkConstants, Trajectory
 from .passage import _Passage, _start_passage
-from .span_modes import ReducedSystem, band_storage, band_width, upper_band
+from .span_modes import ReducedSystem, band_storage, band_width, submatrix
 
 
 def band_rows(ab: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -90,7 +91,7 @@ def prepare_reduced_passage(
     droppers = _dropper_arrays(reduced, modes["inverse_diagonal"])
     residual = _Residuals(reduced, c_k, c_m, droppers["dropper_span"])
     configurations = _configurations(reduced, c_k, c_m, kept, modes, droppers, residual)
-    elements = _element_arrays(reduced, modes, droppers, residual)
+    elements = _element_arrays(reduced, droppers, residual)
     arrays = modes | droppers | configurations | elements
     arrays.update(
         kept=kept,
@@ -163,16 +164,20 @@ def _dropper_arrays(reduced: ReducedSystem, inv_d: np.ndarray) -> dict[str, np.n
         raise AssertionError("the droppers are not in order of span")  # a bug, never a user error
     d_q = np.zeros((d_span.size, inv_d.shape[1]))
     d_c = np.zeros((d_span.size, max(c.size for c in reduced.coupled)))
+    row_size = np.asarray(abs(B).sum(axis=1)).ravel()
+    basis = {}  # per span type: T on its internal and coupled interface DOFs, [[Φ, Ψ], [0, I]]
     for s, dofs in enumerate(reduced.internal):
         q = np.flatnonzero(d_span == s)
         modes = reduced.modes_of(s)
-        B_s = B[q]
-        B_int = B_s[:, dofs].toarray()
         c = reduced.coupled[s]
-        d_q[q, : modes.n_modes] = B_int @ modes.shapes
-        d_c[q, : c.size] = B_int @ modes.constraint + B_s[:, reduced.interface[c]].toarray()
-        if not np.isin(B_s.indices[B_s.data != 0.0], np.r_[dofs, reduced.interface[c]]).all():
+        B_s = submatrix(B, q, np.r_[dofs, reduced.interface[c]])  # internal, then coupled interface
+        if not np.allclose(np.asarray(abs(B_s).sum(axis=1)).ravel(), row_size[q], rtol=1e-12, atol=0.0):
             raise AssertionError("a dropper's row reaches outside its span")  # a bug, never a user error
+        t, m = reduced.span_type[s], modes.n_modes
+        if t not in basis:
+            basis[t] = np.block([[modes.shapes, modes.constraint], [np.zeros((c.size, m)), np.eye(c.size)]])
+        rows = B_s @ basis[t]
+        d_q[q, :m], d_c[q, : c.size] = rows[:, :m], rows[:, m:]
     return dict(
         dropper_span=d_span,
         dropper_start=np.searchsorted(d_span, np.arange(len(reduced.internal) + 1)).astype(np.int64),
@@ -185,7 +190,9 @@ def _dropper_arrays(reduced: ReducedSystem, inv_d: np.ndarray) -> dict[str, np.n
 class _Residuals:
     """The truncated modes' one-step compliance R = K̂_ii⁻¹ - Φ D⁻¹ Φᵀ of each span type, with the near
     and with the far modes, on the internal DOFs where forces act ("selected": the contact wire's z
-    DOFs and the droppers' ends), and each span's droppers as rows over those DOFs."""
+    DOFs and the droppers' ends), the near modes' own Φ D⁻¹ Φᵀ there, and each span's droppers as
+    rows over those DOFs. R is the truncated eigenpairs' own sum Φ_t D_t⁻¹ Φ_tᵀ (the span's
+    eigenvectors diagonalise K̂_ii), without a solve and without the cancellation of a difference."""
 
     def __init__(self, reduced: ReducedSystem, c_k: float, c_m: float, d_span: np.ndarray) -> None:
         system = reduced.system
@@ -199,26 +206,24 @@ class _Residuals:
         self.interface_position = np.full(system.n_dofs, -1, dtype=np.int64)
         self.interface_position[reduced.interface] = np.arange(reduced.interface.size)
         z_dofs = system.contact_wire.z_dofs.ravel()
-        self.selected, self.near, self.far = [], [], []
+        self.selected, self.modal, self.near, self.far = [], [], [], []
         for t, modes in enumerate(reduced.types):
             spans_t = np.flatnonzero(reduced.span_type == t)
             dofs = np.r_[z_dofs, B[np.isin(d_span, spans_t)].indices]
             sel = np.unique(self.local_of[dofs[np.isin(self.span_of[dofs], spans_t)]])
-            unit = np.zeros((modes.shapes.shape[0], sel.size))
-            unit[sel, np.arange(sel.size)] = 1.0
-            effective = upper_band(c_k * modes.stiffness_internal + c_m * modes.mass_internal)
-            inverse = sla.cho_solve_banded((effective, False), unit, check_finite=False)[sel]
             phi = modes.shapes[sel] / np.sqrt(c_k * modes.omega2 + c_m)
+            rest = modes.truncated_shapes[sel] / np.sqrt(c_k * modes.truncated_omega2 + c_m)
             k = modes.far_modes
             self.selected.append(sel)
-            self.near.append(inverse - phi @ phi.T)
-            self.far.append(inverse - phi[:, :k] @ phi[:, :k].T)
+            self.modal.append(phi @ phi.T)
+            self.near.append(rest @ rest.T)
+            self.far.append(self.near[-1] + phi[:, k:] @ phi[:, k:].T)
         self.span_droppers = []
         for s in range(n_spans):
             sel = self.selected[reduced.span_type[s]]
             position = np.full(reduced.internal[s].size, -1)
             position[sel] = np.arange(sel.size)
-            B_s = B[np.flatnonzero(d_span == s)][:, reduced.internal[s]].tocoo()
+            B_s = submatrix(B, np.flatnonzero(d_span == s), reduced.internal[s]).tocoo()
             rows = np.zeros((B_s.shape[0], sel.size))
             np.add.at(rows, (B_s.row, position[B_s.col]), B_s.data)
             self.span_droppers.append(rows)
@@ -268,23 +273,32 @@ def _configurations(
         element_interface=np.zeros((n_spans, nc_max, n_b)),
         dropper_element_interface=np.zeros((n_spans, nc_max, n_drop)),
     )
-    # A span's share of Σ M_cq D⁻¹ M_qc, of the droppers' G and of the residual, per mode count kept.
-    span_sum, modal_block, residual_block = {}, {}, {}
+    # A span's share of Σ M_cq D⁻¹ M_qc, of its droppers' H, G and residual, per mode count kept.
+    start = droppers["dropper_start"]
+    span_sum, span_h, modal_block, residual_block = {}, {}, {}, {}
     for s in range(n_spans):
         t = reduced.span_type[s]
-        q = np.flatnonzero(d_span == s)
+        q = slice(start[s], start[s + 1])
         for k in {types[t].far_modes, types[t].n_modes}:
             mqc = types[t].mass_coupling[:k] * np.sqrt(inv_d[t, :k, None])
             span_sum[s, k] = mqc.T @ mqc
+            span_h[s, k] = d_qd[q, :k] @ coupling[t, :, :k].T
             modal_block[s, k] = (d_q[q, :k] * inv_d[t, :k]) @ d_q[q, :k].T
             residual_block[s, k] = residual.dropper_block(reduced, s, near=k == types[t].n_modes)
     d_cols = modes["coupled"][d_span]
     d_valid = np.arange(nc_max)[None, :] < modes["n_coupled"][reduced.span_type[d_span]][:, None]
     d_rows = np.repeat(np.arange(n_drop), nc_max)[d_valid.ravel()]
+    far = np.array([types[t].far_modes for t in reduced.span_type])
+    far_sum = np.zeros((n_b, n_b))  # every span with its far modes; a configuration adds its near ones
+    for s, c in enumerate(reduced.coupled):
+        far_sum[np.ix_(c, c)] += span_sum[s, far[s]]
     for p in range(n_spans):
-        sum_coupling = np.zeros((n_b, n_b))
-        for s, c in enumerate(reduced.coupled):
-            sum_coupling[np.ix_(c, c)] += span_sum[s, kept[p, s]]
+        sum_coupling = far_sum.copy()
+        for s in np.flatnonzero(kept[p] != far):
+            c = reduced.coupled[s]
+            sum_coupling[np.ix_(c, c)] += span_sum[s, kept[p, s]] - span_sum[s, far[s]]
+        for s in range(n_spans):
+            out["dropper_h"][p, start[s] : start[s + 1]] = span_h[s, kept[p, s]]
         schur = c_k * reduced.interface_stiffness + c_m * reduced.interface_mass - c_m**2 * sum_coupling
         factor = sla.cholesky_banded(band_storage(0.5 * (schur + schur.T), width), check_finite=False)
         out["schur_band"][p] = factor
@@ -292,35 +306,30 @@ def _configurations(
         Y = reduced.interface_mass - c_m * sum_coupling
         for k in range(-width, width + 1):
             out["interface_rhs_rows"][p, max(0, -k) : n_b - max(0, k), width + k] = np.diagonal(Y, k)
-        for s in range(n_spans):
-            q = np.flatnonzero(d_span == s)
-            k = kept[p, s]
-            out["dropper_h"][p, q] = d_qd[q, :k] @ coupling[reduced.span_type[s], :, :k].T
-        H = np.zeros((n_drop, n_b))  # B_c - c_m H on the interface: a unit dropper force's right-hand side
-        H[d_rows, d_cols[d_valid]] = (d_c - c_m * out["dropper_h"][p])[d_valid]
+        # B_c - c_m H on the interface: a unit dropper force's right-hand side (≤ n_c entries a row)
+        H = sp.csr_matrix(
+            ((d_c - c_m * out["dropper_h"][p])[d_valid], (d_rows, d_cols[d_valid])), shape=(n_drop, n_b)
+        )
         own = reduced.coupled[p]  # the pantograph's span: unit forces at its coupled interface DOFs
         unit = np.zeros((n_b, own.size))
         unit[own, np.arange(own.size)] = 1.0
-        X = sla.cho_solve_banded((factor, False), np.c_[H.T, unit], check_finite=False)
+        X = sla.cho_solve_banded((factor, False), np.c_[H.T.toarray(), unit], check_finite=False)
         X, out["element_interface"][p, : own.size] = X[:, :n_drop], X[:, n_drop:].T
         out["dropper_interface"][p] = X.T
         out["dropper_element_interface"][p, : own.size] = X[own]
-        G = H @ X
-        G_full = G.copy()
+        G = out["dropper_modal_flexibility"][p]
+        G[:] = H @ X
+        G_full = out["dropper_flexibility"][p]
+        G_full[:] = G
         for s in range(n_spans):
-            block = np.ix_(*(2 * (np.flatnonzero(d_span == s),)))
-            G[block] += modal_block[s, kept[p, s]]
-            G_full[block] += modal_block[s, kept[p, s]] + residual_block[s, kept[p, s]]
-        out["dropper_modal_flexibility"][p] = G
-        out["dropper_flexibility"][p] = G_full
+            block = slice(start[s], start[s + 1])
+            G[block, block] += modal_block[s, kept[p, s]]
+            G_full[block, block] += modal_block[s, kept[p, s]] + residual_block[s, kept[p, s]]
     return out
 
 
 def _element_arrays(
-    reduced: ReducedSystem,
-    modes: dict[str, np.ndarray],
-    droppers: dict[str, np.ndarray],
-    residual: _Residuals,
+    reduced: ReducedSystem, droppers: dict[str, np.ndarray], residual: _Residuals
 ) -> dict[str, np.ndarray]:
     """Each contact-wire element's span, its DOFs' local indices (or interface positions), and its
     compliance and coupling to its span's droppers, of the residual and of the modes with the
@@ -356,22 +365,20 @@ def _element_arrays(
     for s in range(n_spans):
         els = np.flatnonzero(el_span == s)
         t = reduced.span_type[s]
-        m = reduced.types[t].n_modes
-        local = el_local[els, :, None]
-        phi = np.where(local >= 0, reduced.types[t].shapes[np.maximum(local[..., 0], 0)], 0.0)
-        scaled = phi * modes["inverse_diagonal"][t, :m]
-        el_modal[els] = scaled @ phi.transpose(0, 2, 1)
-        drops = np.flatnonzero(d_span == s)
-        el_drop_modal[els, :, : drops.size] = scaled @ droppers["dropper_q_plain"][drops, :m].T
         where = np.full(reduced.types[t].shapes.shape[0], -1)
         where[residual.selected[t]] = np.arange(residual.selected[t].size)
         R = residual.near[t]
         loc = np.where(el_local[els] >= 0, where[np.maximum(el_local[els], 0)], -1)
         ok = loc >= 0
         safe = np.maximum(loc, 0)
-        el_comp[els] = np.where(ok[:, :, None] & ok[:, None, :], R[safe[:, :, None], safe[:, None, :]], 0.0)
+        both = ok[:, :, None] & ok[:, None, :]
+        el_comp[els] = np.where(both, R[safe[:, :, None], safe[:, None, :]], 0.0)
+        el_modal[els] = np.where(both, residual.modal[t][safe[:, :, None], safe[:, None, :]], 0.0)
+        drops = np.flatnonzero(d_span == s)
         el_droppers[els, : drops.size] = drops
-        el_res[els, :, : drops.size] = np.where(ok[:, :, None], (R @ residual.span_droppers[s].T)[safe], 0.0)
+        rows = residual.span_droppers[s].T
+        el_res[els, :, : drops.size] = np.where(ok[:, :, None], (R @ rows)[safe], 0.0)
+        el_drop_modal[els, :, : drops.size] = np.where(ok[:, :, None], (residual.modal[t] @ rows)[safe], 0.0)
     return dict(
         element_span=el_span,
         element_local=el_local,

@@ -16,6 +16,11 @@ C = αM + βK carries over exactly.
 
 Away from the section's ends every span of a design is the same (the same matrices to rounding),
 so one eigensolution serves all of them: a section has three span types (first, interior, last).
+Mirror images save two more: a span whose matrices are another type's mirrored about mid-span (the
+last span of a symmetric section is the first one's) takes that type's modes mirrored, and a span
+that is its own mirror image (the interior span of a symmetric design) solves its symmetric and
+antisymmetric modes apart, two problems of half the size. Both are exact equivalences, used only
+where the matrices agree to :data:`MIRROR_TOLERANCE`; otherwise the span is solved as it is.
 With every mode kept the reduction is only a change of basis and the reduced model equals the
 exact one; the cut-off is the only approximation.
 """
@@ -27,12 +32,18 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
+from scipy.sparse.csgraph import breadth_first_order
 
 from .linear_system import LinearSystem
 
 SAME_SPAN_TOLERANCE = 1e-9
 """Largest relative difference of two spans' matrices for them to share their modes. Interior
 spans of a section differ by rounding only (about 1e-12)."""
+
+MIRROR_TOLERANCE = 1e-10
+"""Largest relative difference between a span's matrices and the mirror image of another's (or of
+its own) for their eigensolutions to be mirror images. Mirror-image spans of a symmetric design
+differ by rounding only (about 1e-12)."""
 
 
 @dataclass(frozen=True)
@@ -50,9 +61,13 @@ class SpanModes:
     mass_coupling : ndarray (m, n_c)
         Φᵀ (M_ii Ψ + M_ic): the only coupling of the modes to the interface, kg.
     stiffness_internal, mass_internal : ndarray (n_i, n_i)
-        K_ii and M_ii, for the residual flexibility of the truncated modes.
+        K_ii and M_ii.
     far_modes : int
         How many of the modes lie below the far-field cut-off.
+    truncated_omega2 : ndarray (n_i - m,)
+    truncated_shapes : ndarray (n_i, n_i - m)
+        The span's other eigenpairs, above the cut-off: the residual flexibility of the truncated
+        modes is theirs, Φ_t (c_k ω_t² + c_m)⁻¹ Φ_tᵀ.
     """
 
     omega2: np.ndarray
@@ -62,6 +77,8 @@ class SpanModes:
     stiffness_internal: np.ndarray
     mass_internal: np.ndarray
     far_modes: int
+    truncated_omega2: np.ndarray
+    truncated_shapes: np.ndarray
 
     @property
     def n_modes(self) -> int:
@@ -167,13 +184,39 @@ def split_spans(system: LinearSystem) -> tuple[tuple[np.ndarray, ...], np.ndarra
     position[b] = np.arange(b.size)
     internal = tuple(np.flatnonzero((span == s) & ~interface) for s in range(lay.n_spans))
     csr = pattern.tocsr()
-    coupled = tuple(np.unique(position[csr[dofs].indices[interface[csr[dofs].indices]]]) for dofs in internal)
+    columns = (csr.indices[_row_entries(csr, dofs)[0]] for dofs in internal)
+    coupled = tuple(np.unique(position[cols[interface[cols]]]) for cols in columns)
     return internal, b, coupled
 
 
-def band_width(matrix: np.ndarray) -> int:
+def _row_entries(matrix: sp.csr_matrix, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Positions in ``matrix.data`` of the entries of ``rows``, row by row, and their row in ``rows``."""
+    starts = matrix.indptr[rows]
+    lengths = matrix.indptr[rows + 1] - starts
+    first = np.cumsum(lengths) - lengths
+    row = np.repeat(np.arange(rows.size), lengths)
+    return np.repeat(starts - first, lengths) + np.arange(lengths.sum()), row
+
+
+def submatrix(matrix: sp.csr_matrix, rows: np.ndarray, columns: np.ndarray) -> sp.csr_matrix:
+    """``matrix[rows][:, columns]`` (CSR), gathered through the row pointers and a column lookup
+    instead of scipy's fancy indexing, which costs about a millisecond a call."""
+    lookup = np.full(matrix.shape[1], -1)
+    lookup[columns] = np.arange(columns.size)
+    at, row = _row_entries(matrix, rows)
+    cols = lookup[matrix.indices[at]]
+    keep = cols >= 0
+    indptr = np.r_[0, np.cumsum(np.bincount(row[keep], minlength=rows.size))]
+    return sp.csr_matrix((matrix.data[at][keep], cols[keep], indptr), shape=(rows.size, columns.size))
+
+
+def band_width(matrix: np.ndarray | sp.spmatrix) -> int:
     """The largest distance of a non-zero entry from the diagonal."""
-    rows, cols = np.nonzero(matrix)
+    if sp.issparse(matrix):
+        coo = matrix.tocoo()
+        rows, cols = coo.row[coo.data != 0.0], coo.col[coo.data != 0.0]
+    else:
+        rows, cols = np.nonzero(matrix)
     return int(np.max(np.abs(rows - cols), initial=0))
 
 
@@ -186,20 +229,146 @@ def band_storage(matrix: np.ndarray, width: int | None = None) -> np.ndarray:
     return ab
 
 
-def upper_band(matrix: np.ndarray) -> np.ndarray:
-    """The upper Cholesky factor of a banded SPD matrix, in LAPACK band storage."""
-    return sla.cholesky_banded(band_storage(matrix), check_finite=False)
+def upper_band(matrix: np.ndarray, width: int | None = None) -> np.ndarray:
+    """The upper Cholesky factor of a banded SPD matrix, in LAPACK band storage; width: its own by
+    default (at least the matrix's)."""
+    return sla.cholesky_banded(band_storage(matrix, width), check_finite=False)
 
 
-def _span_modes(K_ii, M_ii, K_ic, M_ic, cutoff: float, far_cutoff: float) -> SpanModes:
-    """Fixed-interface modes below ``cutoff`` Hz and constraint modes of one span."""
-    omega2, shapes = sla.eigh(K_ii, M_ii, driver="gvd", check_finite=False)
+@dataclass(frozen=True)
+class Mirror:
+    """A signed permutation P between two spans' internal DOFs: the mirror image on span b of a vector
+    v on span a is (P v)_i = sign_i v[source_i]. Span b's matrices are P (span a's) Pᵀ to
+    :data:`MIRROR_TOLERANCE`, so P maps span a's eigenvectors onto span b's."""
+
+    source: np.ndarray
+    sign: np.ndarray
+
+    def apply(self, vectors: np.ndarray) -> np.ndarray:
+        return self.sign[:, None] * vectors[self.source]
+
+
+def _dof_codes(system: LinearSystem) -> tuple[np.ndarray, np.ndarray]:
+    """Each free DOF's node kind and coordinate within its node (one integer), and its design x, m."""
+    lay = system.static.layout
+    nodes = np.arange(lay.node_x.size)
+    node = np.repeat(nodes, lay.node_size(nodes))
+    coordinate = np.arange(lay.n_dofs) - lay.node_dof[node]
+    kind = lay.node_kind[node] * (coordinate.max() + 1) + coordinate
+    return kind[system.free], lay.node_x[node][system.free]
+
+
+def find_mirror(
+    system: LinearSystem,
+    a: np.ndarray,
+    b: np.ndarray,
+    axis: float,
+    dense_a: tuple[np.ndarray, np.ndarray],
+    rows_b: tuple[sp.csr_matrix, sp.csr_matrix],
+) -> Mirror | None:
+    """The mirror image x → 2 axis - x from span a's internal DOFs onto span b's, if span b's stiffness
+    and mass are span a's mirrored; None otherwise.
+
+    DOFs match by node kind, coordinate within the node and design x; the signs (a coordinate along
+    the track changes sign, and so does a slope) follow from the stiffness, along its strong entries,
+    and both matrices are then checked entry by entry. ``dense_a`` holds K_aa and M_aa, ``rows_b``
+    span b's rows of K and M (its internal DOFs first).
+    """
+    kind, x = _dof_codes(system)
+    if a.size != b.size:
+        return None
+    microns = np.rint(np.r_[x[a], 2.0 * axis - x[b]] * 1e6).astype(np.int64)
+    width = int(kind.max()) + 1
+    code_a, code_b = microns[: a.size] * width + kind[a], microns[a.size :] * width + kind[b]
+    order = np.argsort(code_a)
+    source = order[np.minimum(np.searchsorted(code_a[order], code_b), a.size - 1)]
+    if not np.array_equal(code_a[source], code_b):
+        return None
+    entries = []
+    for dense, rows in zip(dense_a, rows_b, strict=True):
+        coo = rows.tocoo()
+        inside = coo.col < b.size
+        i, j, value = coo.row[inside], coo.col[inside], coo.data[inside]
+        mirrored = dense[source[i], source[j]]
+        if np.count_nonzero(value) != np.count_nonzero(dense) or not np.allclose(
+            np.abs(mirrored), np.abs(value), rtol=0.0, atol=MIRROR_TOLERANCE * np.abs(value).max()
+        ):
+            return None
+        entries.append((i, j, value, mirrored))
+    sign = _mirror_signs(*entries[0], b.size)
+    if sign is None:
+        return None
+    for i, j, value, mirrored in entries:
+        if np.abs(value - sign[i] * sign[j] * mirrored).max() > MIRROR_TOLERANCE * np.abs(value).max():
+            return None
+    return Mirror(source, sign)
+
+
+def _mirror_signs(i: np.ndarray, j: np.ndarray, a: np.ndarray, b: np.ndarray, n: int) -> np.ndarray | None:
+    """Signs σ with σ_i σ_j b = a over the entries (i, j, a, b) of two matrices of size n, found along a
+    spanning tree of the strong entries (above 1e-6 of their diagonal's geometric mean)."""
+    diagonal = np.zeros(n)
+    diagonal[i[i == j]] = np.sqrt(np.abs(a[i == j]))
+    strong = np.abs(a) > 1e-6 * diagonal[i] * diagonal[j]
+    graph = sp.csr_matrix((np.sign(a * b)[strong], (i[strong], j[strong])), shape=(n, n))
+    sign = np.zeros(n)
+    for root in range(n):
+        if sign[root]:
+            continue
+        order, parent = breadth_first_order(graph, root, directed=False)
+        child = order[1:]
+        ratio = np.asarray(graph[parent[child], child]).ravel()
+        if np.any(ratio == 0.0):
+            return None
+        sign[root] = 1.0
+        for v, r in zip(child, ratio, strict=True):
+            sign[v] = sign[parent[v]] * r
+    return sign
+
+
+def _eigensolution(
+    K_ii: np.ndarray, M_ii: np.ndarray, mirror: Mirror | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """All eigenpairs (ω², mass-normalised Φ) of K_ii φ = ω² M_ii φ, in ascending order.
+
+    With a span's own mirror image P (P K Pᵀ = K, P M Pᵀ = M, P² = I), the symmetric and the
+    antisymmetric modes (P φ = ±φ) are solved apart, each in an orthonormal basis of its subspace:
+    pairs of mirror DOFs (e_i ± σ_i e_j) / √2, and the DOFs on the mirror plane alone.
+    """
+    if mirror is None or np.any(mirror.sign * mirror.sign[mirror.source] != 1.0):  # P² = I
+        return sla.eigh(K_ii, M_ii, driver="gvd", check_finite=False)
+    n = K_ii.shape[0]
+    index = np.arange(n)
+    first, sign = index < mirror.source, mirror.sign
+    pairs, half = index[first], np.sqrt(0.5)
+    omega2, shapes = [], []
+    for parity in (1.0, -1.0):
+        on_plane = index[(mirror.source == index) & (sign == parity)]
+        rows = np.r_[pairs, mirror.source[pairs], on_plane]
+        cols = np.r_[np.arange(pairs.size), np.arange(pairs.size), pairs.size + np.arange(on_plane.size)]
+        values = np.r_[np.full(pairs.size, half), parity * half * sign[pairs], np.ones(on_plane.size)]
+        Q = sp.csr_matrix((values, (rows, cols)), shape=(n, pairs.size + on_plane.size))
+        Qt = Q.T.tocsr()
+        w, v = sla.eigh(Qt @ (Qt @ K_ii).T, Qt @ (Qt @ M_ii).T, driver="gvd", check_finite=False)
+        omega2.append(w)
+        shapes.append(Q @ v)
+    order = np.argsort(np.concatenate(omega2), kind="stable")
+    return np.concatenate(omega2)[order], np.hstack(shapes)[:, order]
+
+
+def _span_modes(
+    K_ii, M_ii, K_ic, M_ic, cutoff: float, far_cutoff: float, eigen: tuple[np.ndarray, np.ndarray], width: int
+) -> SpanModes:
+    """Fixed-interface modes below ``cutoff`` Hz (from all the span's eigenpairs) and constraint modes;
+    ``width``: K_ii's band width."""
+    omega2, shapes = eigen
     keep = int(np.searchsorted(omega2, (2.0 * np.pi * cutoff) ** 2, side="right"))
+    truncated = omega2[keep:], shapes[:, keep:]
     omega2, shapes = omega2[:keep], shapes[:, :keep]
     far = int(np.searchsorted(omega2, (2.0 * np.pi * far_cutoff) ** 2, side="right"))
-    constraint = -sla.cho_solve_banded((upper_band(K_ii), False), K_ic, check_finite=False)
+    constraint = -sla.cho_solve_banded((upper_band(K_ii, width), False), K_ic, check_finite=False)
     coupling = shapes.T @ (M_ii @ constraint + M_ic)
-    return SpanModes(omega2, shapes, constraint, coupling, K_ii, M_ii, far)
+    return SpanModes(omega2, shapes, constraint, coupling, K_ii, M_ii, far, *truncated)
 
 
 def _same_sparse(a: sp.csr_matrix, b: sp.csr_matrix) -> bool:
@@ -221,31 +390,45 @@ def reduce_system(system: LinearSystem, cutoff: float, far_cutoff: float | None 
     internal, b, coupled = split_spans(system)
     K = system.stiffness.tocsr()
     M = system.mass.tocsr()
+    span_length = system.static.layout.span_length
     types: list[SpanModes] = []
-    # Per type: its blocks (sparse, for comparison) and the interface matrices a span of it adds.
-    representatives: list[tuple[sp.csr_matrix, ...]] = []
+    # Per type: its first span, its rows of K and M (sparse, for comparison), all its eigenpairs and
+    # the interface matrices a span of it adds.
+    representatives: list[tuple[int, tuple[sp.csr_matrix, ...], tuple[np.ndarray, np.ndarray]]] = []
     added: list[tuple[np.ndarray, np.ndarray]] = []
     span_type = np.zeros(len(internal), dtype=np.int64)
     for s, dofs in enumerate(internal):
-        cols = b[coupled[s]]
-        K_s, M_s = K[dofs], M[dofs]
-        blocks = (K_s[:, dofs], M_s[:, dofs], K_s[:, cols], M_s[:, cols])
-        for t, rep in enumerate(representatives):
-            if all(_same_sparse(x, r) for x, r in zip(blocks, rep, strict=True)):
+        columns = np.r_[dofs, b[coupled[s]]]  # internal, then coupled interface
+        rows = (submatrix(K, dofs, columns), submatrix(M, dofs, columns))
+        for t, (_, rep, _) in enumerate(representatives):
+            if all(_same_sparse(x, r) for x, r in zip(rows, rep, strict=True)):
                 span_type[s] = t
                 break
         else:
             span_type[s] = len(types)
-            representatives.append(blocks)
-            K_ii, M_ii, K_ic, M_ic = (x.toarray() for x in blocks)
-            modes = _span_modes(K_ii, M_ii, K_ic, M_ic, cutoff, far_cutoff)
+            (K_ii, K_ic), (M_ii, M_ic) = (np.hsplit(x.toarray(), [dofs.size]) for x in rows)
+            eigen = None
+            for r, _, rep_eigen in representatives:  # another type's mirror image?
+                rep = types[span_type[r]]
+                axis = 0.5 * (r + s + 1) * span_length
+                dense = (rep.stiffness_internal, rep.mass_internal)
+                mirror = find_mirror(system, internal[r], dofs, axis, dense, rows)
+                if mirror is not None:
+                    eigen = (rep_eigen[0], mirror.apply(rep_eigen[1]))
+                    break
+            if eigen is None:  # its own mirror image?
+                mirror = find_mirror(system, dofs, dofs, (s + 0.5) * span_length, (K_ii, M_ii), rows)
+                eigen = _eigensolution(K_ii, M_ii, mirror)
+            representatives.append((s, rows, eigen))
+            width = band_width(rows[0][:, : dofs.size])
+            modes = _span_modes(K_ii, M_ii, K_ic, M_ic, cutoff, far_cutoff, eigen, width)
             types.append(modes)
             # Ψᵀ M_ii Ψ + Ψᵀ M_ic + M_ci Ψ on the coupled interface DOFs; for K the same sum, K_ci Ψ.
             Psi = modes.constraint
             cross = Psi.T @ M_ic
             added.append((Psi.T @ M_ii @ Psi + cross + cross.T, K_ic.T @ Psi))
-    interface_mass = M[b][:, b].toarray()
-    interface_stiffness = K[b][:, b].toarray()
+    interface_mass = submatrix(M, b, b).toarray()
+    interface_stiffness = submatrix(K, b, b).toarray()
     for s, c in enumerate(coupled):
         mass, stiffness = added[span_type[s]]
         interface_mass[np.ix_(c, c)] += mass
