@@ -216,7 +216,7 @@ def _own_mirror(system, span):
         span_modes.submatrix(x.tocsr(), dofs, np.r_[dofs, b[coupled[span]]])
         for x in (system.stiffness, system.mass)
     )
-    dense = tuple(x[:, : dofs.size].toarray() for x in rows)
+    dense = tuple(x.toarray()[:, : dofs.size] for x in rows)
     axis = (span + 0.5) * system.static.layout.span_length
     return span_modes.find_mirror(system, dofs, dofs, axis, dense, rows)
 

@@ -34,7 +34,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
-import scipy.sparse as sp
 from numpy.lib.stride_tricks import sliding_window_view
 
 from ..model.definition import PantographDefinition
@@ -170,8 +169,8 @@ def _dropper_arrays(reduced: ReducedSystem, inv_d: np.ndarray) -> dict[str, np.n
         q = np.flatnonzero(d_span == s)
         modes = reduced.modes_of(s)
         c = reduced.coupled[s]
-        B_s = submatrix(B, q, np.r_[dofs, reduced.interface[c]])  # internal, then coupled interface
-        if not np.allclose(np.asarray(abs(B_s).sum(axis=1)).ravel(), row_size[q], rtol=1e-12, atol=0.0):
+        B_s = submatrix(B, q, np.r_[dofs, reduced.interface[c]]).toarray()  # internal, then coupled
+        if not np.allclose(np.abs(B_s).sum(axis=1), row_size[q], rtol=1e-12, atol=0.0):
             raise AssertionError("a dropper's row reaches outside its span")  # a bug, never a user error
         t, m = reduced.span_type[s], modes.n_modes
         if t not in basis:
@@ -223,7 +222,7 @@ class _Residuals:
             sel = self.selected[reduced.span_type[s]]
             position = np.full(reduced.internal[s].size, -1)
             position[sel] = np.arange(sel.size)
-            B_s = submatrix(B, np.flatnonzero(d_span == s), reduced.internal[s]).tocoo()
+            B_s = submatrix(B, np.flatnonzero(d_span == s), reduced.internal[s])
             rows = np.zeros((B_s.shape[0], sel.size))
             np.add.at(rows, (B_s.row, position[B_s.col]), B_s.data)
             self.span_droppers.append(rows)
@@ -288,43 +287,51 @@ def _configurations(
     d_cols = modes["coupled"][d_span]
     d_valid = np.arange(nc_max)[None, :] < modes["n_coupled"][reduced.span_type[d_span]][:, None]
     d_rows = np.repeat(np.arange(n_drop), nc_max)[d_valid.ravel()]
+    # Every span with its far modes; a configuration adds its near spans' differences.
     far = np.array([types[t].far_modes for t in reduced.span_type])
-    far_sum = np.zeros((n_b, n_b))  # every span with its far modes; a configuration adds its near ones
+    far_sum = np.zeros((n_b, n_b))
+    far_h = np.zeros((n_drop, nc_max))
+    far_blocks = np.zeros((2, n_drop, n_drop))  # the droppers' G of their span's modes, and with the residual
     for s, c in enumerate(reduced.coupled):
+        q = slice(start[s], start[s + 1])
         far_sum[np.ix_(c, c)] += span_sum[s, far[s]]
+        far_h[q] = span_h[s, far[s]]
+        far_blocks[0, q, q] = modal_block[s, far[s]]
+        far_blocks[1, q, q] = modal_block[s, far[s]] + residual_block[s, far[s]]
+    diagonals = np.arange(n_b)[:, None] + np.arange(-width, width + 1)[None, :]  # Y[r, r + k] at [r, w + k]
+    inside = (diagonals >= 0) & (diagonals < n_b)
+    diagonals = np.clip(diagonals, 0, n_b - 1)
     for p in range(n_spans):
         sum_coupling = far_sum.copy()
+        dropper_h = out["dropper_h"][p]
+        dropper_h[:] = far_h
+        G, G_full = out["dropper_modal_flexibility"][p], out["dropper_flexibility"][p]
+        G[:], G_full[:] = far_blocks
         for s in np.flatnonzero(kept[p] != far):
-            c = reduced.coupled[s]
-            sum_coupling[np.ix_(c, c)] += span_sum[s, kept[p, s]] - span_sum[s, far[s]]
-        for s in range(n_spans):
-            out["dropper_h"][p, start[s] : start[s + 1]] = span_h[s, kept[p, s]]
+            c, q, k = reduced.coupled[s], slice(start[s], start[s + 1]), kept[p, s]
+            sum_coupling[np.ix_(c, c)] += span_sum[s, k] - span_sum[s, far[s]]
+            dropper_h[q] = span_h[s, k]
+            G[q, q] = modal_block[s, k]
+            G_full[q, q] = modal_block[s, k] + residual_block[s, k]
         schur = c_k * reduced.interface_stiffness + c_m * reduced.interface_mass - c_m**2 * sum_coupling
         factor = sla.cholesky_banded(band_storage(0.5 * (schur + schur.T), width), check_finite=False)
         out["schur_band"][p] = factor
         out["schur_columns"][p], out["schur_rows"][p], out["schur_inverse_diagonal"][p] = band_rows(factor)
         Y = reduced.interface_mass - c_m * sum_coupling
-        for k in range(-width, width + 1):
-            out["interface_rhs_rows"][p, max(0, -k) : n_b - max(0, k), width + k] = np.diagonal(Y, k)
+        out["interface_rhs_rows"][p] = np.where(inside, Y[np.arange(n_b)[:, None], diagonals], 0.0)
         # B_c - c_m H on the interface: a unit dropper force's right-hand side (≤ n_c entries a row)
-        H = sp.csr_matrix(
-            ((d_c - c_m * out["dropper_h"][p])[d_valid], (d_rows, d_cols[d_valid])), shape=(n_drop, n_b)
-        )
+        H = np.zeros((n_drop, n_b))
+        H[d_rows, d_cols[d_valid]] = (d_c - c_m * dropper_h)[d_valid]
         own = reduced.coupled[p]  # the pantograph's span: unit forces at its coupled interface DOFs
         unit = np.zeros((n_b, own.size))
         unit[own, np.arange(own.size)] = 1.0
-        X = sla.cho_solve_banded((factor, False), np.c_[H.T.toarray(), unit], check_finite=False)
+        X = sla.cho_solve_banded((factor, False), np.c_[H.T, unit], check_finite=False)
         X, out["element_interface"][p, : own.size] = X[:, :n_drop], X[:, n_drop:].T
         out["dropper_interface"][p] = X.T
         out["dropper_element_interface"][p, : own.size] = X[own]
-        G = out["dropper_modal_flexibility"][p]
-        G[:] = H @ X
-        G_full = out["dropper_flexibility"][p]
-        G_full[:] = G
-        for s in range(n_spans):
-            block = slice(start[s], start[s + 1])
-            G[block, block] += modal_block[s, kept[p, s]]
-            G_full[block, block] += modal_block[s, kept[p, s]] + residual_block[s, kept[p, s]]
+        HX = H @ X
+        G += HX
+        G_full += HX
     return out
 
 

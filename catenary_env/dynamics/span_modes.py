@@ -198,22 +198,46 @@ def _row_entries(matrix: sp.csr_matrix, rows: np.ndarray) -> tuple[np.ndarray, n
     return np.repeat(starts - first, lengths) + np.arange(lengths.sum()), row
 
 
-def submatrix(matrix: sp.csr_matrix, rows: np.ndarray, columns: np.ndarray) -> sp.csr_matrix:
-    """``matrix[rows][:, columns]`` (CSR), gathered through the row pointers and a column lookup
-    instead of scipy's fancy indexing, which costs about a millisecond a call."""
+@dataclass(frozen=True)
+class SparseRows:
+    """Some rows of a sparse matrix on chosen columns, as coordinates (row, column, value) in row order:
+    what a span's comparison and its dense blocks need, without scipy's checks on each new matrix."""
+
+    row: np.ndarray
+    col: np.ndarray
+    data: np.ndarray
+    shape: tuple[int, int]
+
+    def toarray(self) -> np.ndarray:
+        dense = np.zeros(self.shape)
+        dense[self.row, self.col] = self.data
+        return dense
+
+    def same(self, other: SparseRows) -> bool:
+        """Equal to :data:`SAME_SPAN_TOLERANCE` (an entry that rounds to zero in one may be stored)."""
+        if self.shape != other.shape:
+            return False
+        scale = SAME_SPAN_TOLERANCE * np.abs(other.data).max(initial=0.0)
+        if np.array_equal(self.row, other.row) and np.array_equal(self.col, other.col):
+            return bool(np.abs(self.data - other.data).max(initial=0.0) <= scale)
+        return bool(np.abs(self.toarray() - other.toarray()).max() <= scale)
+
+
+def submatrix(matrix: sp.csr_matrix, rows: np.ndarray, columns: np.ndarray) -> SparseRows:
+    """``matrix[rows][:, columns]``, gathered through the row pointers and a column lookup instead of
+    scipy's fancy indexing (about a millisecond a call)."""
     lookup = np.full(matrix.shape[1], -1)
     lookup[columns] = np.arange(columns.size)
     at, row = _row_entries(matrix, rows)
-    cols = lookup[matrix.indices[at]]
-    keep = cols >= 0
-    indptr = np.r_[0, np.cumsum(np.bincount(row[keep], minlength=rows.size))]
-    return sp.csr_matrix((matrix.data[at][keep], cols[keep], indptr), shape=(rows.size, columns.size))
+    col = lookup[matrix.indices[at]]
+    keep = col >= 0
+    return SparseRows(row[keep], col[keep], matrix.data[at][keep], (rows.size, columns.size))
 
 
-def band_width(matrix: np.ndarray | sp.spmatrix) -> int:
+def band_width(matrix: np.ndarray | sp.spmatrix | SparseRows) -> int:
     """The largest distance of a non-zero entry from the diagonal."""
-    if sp.issparse(matrix):
-        coo = matrix.tocoo()
+    if isinstance(matrix, SparseRows) or sp.issparse(matrix):
+        coo = matrix if isinstance(matrix, SparseRows) else matrix.tocoo()
         rows, cols = coo.row[coo.data != 0.0], coo.col[coo.data != 0.0]
     else:
         rows, cols = np.nonzero(matrix)
@@ -264,7 +288,7 @@ def find_mirror(
     b: np.ndarray,
     axis: float,
     dense_a: tuple[np.ndarray, np.ndarray],
-    rows_b: tuple[sp.csr_matrix, sp.csr_matrix],
+    rows_b: tuple[SparseRows, SparseRows],
 ) -> Mirror | None:
     """The mirror image x → 2 axis - x from span a's internal DOFs onto span b's, if span b's stiffness
     and mass are span a's mirrored; None otherwise.
@@ -286,9 +310,8 @@ def find_mirror(
         return None
     entries = []
     for dense, rows in zip(dense_a, rows_b, strict=True):
-        coo = rows.tocoo()
-        inside = coo.col < b.size
-        i, j, value = coo.row[inside], coo.col[inside], coo.data[inside]
+        inside = rows.col < b.size
+        i, j, value = rows.row[inside], rows.col[inside], rows.data[inside]
         mirrored = dense[source[i], source[j]]
         if np.count_nonzero(value) != np.count_nonzero(dense) or not np.allclose(
             np.abs(mirrored), np.abs(value), rtol=0.0, atol=MIRROR_TOLERANCE * np.abs(value).max()
@@ -371,16 +394,6 @@ def _span_modes(
     return SpanModes(omega2, shapes, constraint, coupling, K_ii, M_ii, far, *truncated)
 
 
-def _same_sparse(a: sp.csr_matrix, b: sp.csr_matrix) -> bool:
-    """Equal to :data:`SAME_SPAN_TOLERANCE` (an entry that rounds to zero in one span may be stored)."""
-    if a.shape != b.shape:
-        return False
-    scale = SAME_SPAN_TOLERANCE * np.abs(b.data).max(initial=0.0)
-    if np.array_equal(a.indptr, b.indptr) and np.array_equal(a.indices, b.indices):
-        return bool(np.abs(a.data - b.data).max(initial=0.0) <= scale)
-    return bool(abs(a - b).max() <= scale)
-
-
 def reduce_system(system: LinearSystem, cutoff: float, far_cutoff: float | None = None) -> ReducedSystem:
     """Reduce ``system`` to span modes below ``cutoff`` Hz (``inf`` keeps every mode: exact).
 
@@ -394,14 +407,14 @@ def reduce_system(system: LinearSystem, cutoff: float, far_cutoff: float | None 
     types: list[SpanModes] = []
     # Per type: its first span, its rows of K and M (sparse, for comparison), all its eigenpairs and
     # the interface matrices a span of it adds.
-    representatives: list[tuple[int, tuple[sp.csr_matrix, ...], tuple[np.ndarray, np.ndarray]]] = []
+    representatives: list[tuple[int, tuple[SparseRows, ...], tuple[np.ndarray, np.ndarray]]] = []
     added: list[tuple[np.ndarray, np.ndarray]] = []
     span_type = np.zeros(len(internal), dtype=np.int64)
     for s, dofs in enumerate(internal):
         columns = np.r_[dofs, b[coupled[s]]]  # internal, then coupled interface
         rows = (submatrix(K, dofs, columns), submatrix(M, dofs, columns))
         for t, (_, rep, _) in enumerate(representatives):
-            if all(_same_sparse(x, r) for x, r in zip(rows, rep, strict=True)):
+            if all(x.same(r) for x, r in zip(rows, rep, strict=True)):
                 span_type[s] = t
                 break
         else:
@@ -420,7 +433,9 @@ def reduce_system(system: LinearSystem, cutoff: float, far_cutoff: float | None 
                 mirror = find_mirror(system, dofs, dofs, (s + 0.5) * span_length, (K_ii, M_ii), rows)
                 eigen = _eigensolution(K_ii, M_ii, mirror)
             representatives.append((s, rows, eigen))
-            width = band_width(rows[0][:, : dofs.size])
+            stiffness = rows[0]
+            inside = (stiffness.col < dofs.size) & (stiffness.data != 0.0)
+            width = int(np.abs(stiffness.row - stiffness.col)[inside].max(initial=0))
             modes = _span_modes(K_ii, M_ii, K_ic, M_ic, cutoff, far_cutoff, eigen, width)
             types.append(modes)
             # Ψᵀ M_ii Ψ + Ψᵀ M_ic + M_ci Ψ on the coupled interface DOFs; for K the same sum, K_ci Ψ.
