@@ -125,6 +125,9 @@ def test_a_package_shadowing_the_plugins_is_named(monkeypatch, tmp_path, capsys)
     shadow = tmp_path / "optimizers"
     shadow.mkdir()
     (shadow / "__init__.py").write_text("")
+    # Its own cli.py too: under an editable install, setuptools' finder would otherwise still serve the
+    # project's ``optimizers.cli`` below the shadowing package, and the command would load.
+    (shadow / "cli.py").write_text("")
     monkeypatch.syspath_prepend(str(tmp_path))
     for name in [m for m in sys.modules if m == "optimizers" or m.startswith("optimizers.")]:
         monkeypatch.delitem(sys.modules, name)
