@@ -68,23 +68,35 @@ def level_layout(catenary: CatenaryDefinition, n_spans: int, fidelity: Fidelity)
     )
 
 
+class _Phases:
+    """Wall-clock and CPU time (this process's) of each phase, s: on a shared machine the CPU time is
+    the steadier of the two (the wall clock adds the time other processes hold the core)."""
+
+    def __init__(self) -> None:
+        self.times: dict[str, float] = {}
+        self._start = (time.perf_counter(), time.process_time())
+
+    def lap(self, phase: str) -> None:
+        now = (time.perf_counter(), time.process_time())
+        self.times[phase] = now[0] - self._start[0]
+        self.times["cpu_" + phase] = now[1] - self._start[1]
+        self._start = now
+
+
 def one_evaluation(
     preset: str, n_spans: int, speed_kmh: float, uplift: float, fidelity: Fidelity, backend: str
 ) -> dict[str, float]:
-    """Time each phase of one evaluation on ``fidelity.dynamics``' model, s; also returns σ."""
+    """Time each phase of one evaluation on ``fidelity.dynamics``' model (wall and CPU), s; also
+    returns σ."""
     catenary = load_catenary(preset)
     pantograph = load_pantograph(catenary.pantograph)
-    times: dict[str, float] = {}
-    t = time.perf_counter()
+    phases = _Phases()
     static = find_shape(level_layout(catenary, n_spans, fidelity))
-    times["shape_finding"] = time.perf_counter() - t
-    t = time.perf_counter()
+    phases.lap("shape_finding")
     system = linearise(static)
-    times["linearisation"] = time.perf_counter() - t
-    t = time.perf_counter()
+    phases.lap("linearisation")
     prepared = prepare_dynamics(system, fidelity)
-    times["preparation"] = time.perf_counter() - t
-    t = time.perf_counter()
+    phases.lap("preparation")
     if fidelity.dynamics == "exact":
         trajectory = simulate_passage(
             system,
@@ -97,17 +109,30 @@ def one_evaluation(
         )
     else:
         trajectory = simulate_reduced_passage(prepared, pantograph, uplift, speed_kmh / 3.6, backend=backend)
-    times["passage"] = time.perf_counter() - t
-    t = time.perf_counter()
+    phases.lap("passage")
     window = analysis_window(catenary, Fidelity(n_spans=n_spans, analysis_spans=max(1, n_spans // 2)))
     stats = passage_statistics(trajectory, window)
-    times["statistics"] = time.perf_counter() - t
+    phases.lap("statistics")
+    times = phases.times
     times["total"] = sum(times[p] for p in PHASES)
+    times["cpu_total"] = sum(times["cpu_" + p] for p in PHASES)
     times["simulated_time"] = float(trajectory.time[-1])
     times["steps"] = trajectory.time.size
     times["n_dofs"] = system.n_dofs
     times["sigma"] = stats.std
     return times
+
+
+def study_evaluation(preset: str, n_spans: int, speed_kmh: float, uplift: float, fidelity: Fidelity) -> dict:
+    """One evaluation as the design studies run it (:func:`catenary_env.pipeline.evaluate`: the checks,
+    and on the span-mode model a passage that stops one span after the analysis section), s."""
+    catenary = load_catenary(preset)
+    fidelity = dataclasses.replace(fidelity, n_spans=n_spans, analysis_spans=max(1, n_spans // 2))
+    phases = _Phases()
+    pantograph = load_pantograph(catenary.pantograph)
+    evaluation = evaluate(catenary, pantograph, level_design(catenary), speed_kmh / 3.6, fidelity, uplift)
+    phases.lap("total")
+    return dict(phases.times, sigma=evaluation.statistics.std)
 
 
 def backend_comparison(
@@ -264,14 +289,17 @@ def measure_models(
             med["max_total"] = max(r["total"] for r in runs[model])
             med["real_time_factor"] = med["total"] / med["simulated_time"]
             med["passage_per_step_us"] = 1e6 * med["passage"] / (med["steps"] - 1)
+            med["cpu_passage_per_step_us"] = 1e6 * med["cpu_passage"] / (med["steps"] - 1)
             med["passage_per_step_dof_ns"] = 1e3 * med["passage_per_step_us"] / med["n_dofs"]
             results[model][n] = med
             if not args.json:
                 print(
                     f"{model:<10} {n:3d} spans: {med['n_dofs']:.0f} DOFs, median {med['total']:.2f} s "
-                    f"(min {med['min_total']:.2f}, max {med['max_total']:.2f}) over {args.runs} runs, "
-                    f"passage {med['passage']:.2f} s ({med['passage_per_step_us']:.0f} µs/step), "
-                    f"real-time factor {med['real_time_factor']:.2f}, σ = {med['sigma']:.3f} N",
+                    f"(min {med['min_total']:.2f}, max {med['max_total']:.2f}; CPU {med['cpu_total']:.2f}) "
+                    f"over {args.runs} runs, passage {med['passage']:.2f} s "
+                    f"({med['passage_per_step_us']:.0f} µs/step; CPU {med['cpu_passage_per_step_us']:.0f}), "
+                    "real-time factor "
+                    f"{med['real_time_factor']:.2f}, σ = {med['sigma']:.3f} N",
                     flush=True,
                 )
     return results
@@ -359,9 +387,17 @@ def main() -> int:
     }
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
+    studies = [
+        study_evaluation(args.preset, args.main_spans, args.speed, args.uplift, study)
+        for _ in range(args.runs)
+    ]
+    study_run = {key: statistics.median(r[key] for r in studies) for key in studies[0]}
+
     def figures(med: dict[str, float]) -> dict[str, object]:
         return {
             "phases_median_s": {p: med[p] for p in PHASES},
+            "phases_cpu_median_s": {p: med["cpu_" + p] for p in PHASES},
+            "total_cpu_median_s": med["cpu_total"],
             "total_median_s": med["total"],
             "total_min_s": med["min_total"],
             "total_max_s": med["max_total"],
@@ -381,6 +417,11 @@ def main() -> int:
         "simulated_time_s": main["simulated_time"],
         "models": {model: figures(results[model][args.main_spans]) for model in MODELS},
         "study_over_exact": reduced["total"] / main["total"],
+        "study_over_exact_cpu": reduced["cpu_total"] / main["cpu_total"],
+        "study_evaluation": {
+            "total_median_s": study_run["total"],
+            "total_cpu_median_s": study_run["cpu_total"],
+        },
         "memory_peak_traced_mib": peak,
         "process_max_rss_mib": rss,
         "scaling": {
@@ -406,15 +447,23 @@ def main() -> int:
         f"\n{args.main_spans} spans at {args.speed:g} km/h ({main['simulated_time']:.1f} s simulated), "
         "medians:"
     )
-    print(f"  {'phase':<14} {'span-modes':>10} {'exact':>10}")
-    for p in PHASES:
-        print(f"  {p:<14} {reduced[p]:9.3f}s {main[p]:9.3f}s")
-    print(f"  {'total':<14} {reduced['total']:9.3f}s {main['total']:9.3f}s")
+    print(f"  {'phase':<14} {'span-modes':>10} {'exact':>10}   CPU: {'span-modes':>10} {'exact':>10}")
+    for p in (*PHASES, "total"):
+        print(
+            f"  {p:<14} {reduced[p]:9.3f}s {main[p]:9.3f}s        {reduced['cpu_' + p]:9.3f}s "
+            f"{main['cpu_' + p]:9.3f}s"
+        )
     print(
         f"span-modes / exact = {reduced['total'] / main['total']:.3f} "
-        f"({main['total'] / reduced['total']:.1f}x faster); real-time factors "
-        f"{reduced['real_time_factor']:.2f} and {main['real_time_factor']:.2f}; "
+        f"({main['total'] / reduced['total']:.1f}x faster; "
+        f"CPU {reduced['cpu_total'] / main['cpu_total']:.3f}); "
+        f"real-time factors {reduced['real_time_factor']:.2f} and {main['real_time_factor']:.2f}; "
         f"σ {reduced['sigma']:.3f} N and {main['sigma']:.3f} N"
+    )
+    print(
+        f"span-modes evaluation as the studies run it (evaluate: checks, and the passage stops one span "
+        f"after the analysis section): {study_run['total']:.3f} s (CPU {study_run['cpu_total']:.3f} s), "
+        f"σ {study_run['sigma']:.3f} N"
     )
     print(f"warm-up (imports, numba cache or compilation, 3 spans): {warm_up:.1f} s")
     print(

@@ -19,6 +19,7 @@ from catenary_env.dynamics.reduced_passage import prepare_reduced_passage, simul
 from catenary_env.dynamics.span_modes import reduce_system, reduced_matrices
 from catenary_env.fem.layout import build_layout
 from catenary_env.model.design import Design, DesignError, level_design
+from catenary_env.model.options import FORMER_DEFAULTS, ModellingOptions
 from catenary_env.pipeline import FIDELITIES, Fidelity, check_fidelity, evaluate
 from catenary_env.statics.shape_finding import find_shape
 
@@ -27,8 +28,13 @@ DT = 2e-3
 
 
 @pytest.fixture(scope="module")
-def system(benchmark_static):
-    return linearise(benchmark_static)
+def system(benchmark_catenary):
+    # The model of physics revision 2 (hinged messenger, extensible wires): its interior spans are identical
+    # to round-off and it has modes between the cut-offs tried below. With the default continuous messenger
+    # a span's shape departs from its neighbours' by 1e-6 one span from an end, 1e-9 two spans in, so each
+    # of those spans is its own type; the reduction itself is the same.
+    catenary = dataclasses.replace(benchmark_catenary, modelling=ModellingOptions(**FORMER_DEFAULTS))
+    return linearise(find_shape(build_layout(catenary, level_design(catenary), 5, 1.0, 2.0)))
 
 
 @pytest.fixture(scope="module")
@@ -185,12 +191,13 @@ def test_mirror_images_give_the_same_modes(system, monkeypatch):
     assert mirrored.span_type.tolist() == plain.span_type.tolist()
     for a, b in zip(plain.types, mirrored.types, strict=True):
         assert a.n_modes == b.n_modes and a.far_modes == b.far_modes
-        assert np.allclose(a.omega2, b.omega2, rtol=1e-10, atol=0.0)
+        # the mirror images agree to MIRROR_TOLERANCE of the largest entry: the low modes to about 1e-10
+        assert np.allclose(a.omega2, b.omega2, rtol=1e-8, atol=0.0)
         # the same subspace: Φ_aᵀ M Φ_b is orthogonal
         overlap = np.linalg.svd(a.shapes.T @ a.mass_internal @ b.shapes, compute_uv=False)
         assert np.allclose(overlap, 1.0, atol=1e-9)
         assert np.allclose(b.shapes.T @ b.mass_internal @ b.shapes, np.eye(b.n_modes), atol=1e-9)
-        assert np.allclose(a.truncated_omega2, b.truncated_omega2, rtol=1e-10, atol=0.0)
+        assert np.allclose(a.truncated_omega2, b.truncated_omega2, rtol=1e-8, atol=0.0)
 
 
 def test_the_passage_with_mirrored_modes_equals_the_plain_one(
