@@ -462,8 +462,7 @@ def main() -> int:
     )
     print(
         f"span-modes evaluation as the studies run it (evaluate: checks, and the passage stops one span "
-        f"after the analysis section): {study_run['total']:.3f} s (CPU {study_run['cpu_total']:.3f} s), "
-        f"σ {study_run['sigma']:.3f} N"
+        f"after the analysis section): {study_run['total']:.3f} s (CPU {study_run['cpu_total']:.3f} s)"
     )
     print(f"warm-up (imports, numba cache or compilation, 3 spans): {warm_up:.1f} s")
     print(
