@@ -30,17 +30,14 @@ from ._kernels import (
     A5,
     CONTACT,
     CONTACT_STIFFNESS,
-    E1,
-    E2,
-    E3,
     G1,
     G2,
     G3,
-    INVERSE_STIFFNESS_FACTOR,
     MASS_FACTOR,
     RAYLEIGH_BETA,
     SLACK_STEPS,
     UNRESOLVED,
+    _advance,
     _settle,
     pantograph_known,
     settle_workspace,
@@ -114,7 +111,7 @@ class ReducedArrays(NamedTuple):
 
 
 class ReducedState(NamedTuple):
-    """State and histories. u, v, a, e, y (n_r,): the next u_known is K̂⁻¹ M e + y / c_k; Bu, Bv, Ba
+    """State and histories. u, v, a, e, y (n_r,): the next u_known is K̂⁻¹ M e + y; Bu, Bv, Ba
     (D,): the droppers' elongations of u, v, a; flags: contact, configuration, slack steps, unresolved."""
 
     u: np.ndarray
@@ -268,26 +265,6 @@ def _configure(d, st, c):  # pragma: no cover - compiled
 
 
 @njit(cache=True, fastmath=FAST)
-def _advance(u, v, acc, e_vec, y, x, cf):  # pragma: no cover - compiled
-    """Newmark update of one span's (or the interface's) coordinates to u₁ = x + y / c_k, and the next
-    step's e and y there (1-D views of equal length, so that the loop vectorises: a seventh array
-    would exceed the compiler's checks for overlapping arrays, and the loop would stay scalar)."""
-    e1, e2, e3, g1, g2, g3 = cf[E1], cf[E2], cf[E3], cf[G1], cf[G2], cf[G3]
-    a0, a1, a2, a3, a4, a5 = cf[A0], cf[A1], cf[A2], cf[A3], cf[A4], cf[A5]
-    inv_ck = cf[INVERSE_STIFFNESS_FACTOR]
-    for i in range(u.size):
-        u_new = x[i] + inv_ck * y[i]
-        du = u_new - u[i]
-        acc_new = a0 * du - a2 * v[i] - a3 * acc[i]
-        v_new = a1 * du - a4 * v[i] - a5 * acc[i]
-        u[i] = u_new
-        v[i] = v_new
-        acc[i] = acc_new
-        e_vec[i] = e1 * u_new + e2 * v_new + e3 * acc_new
-        y[i] = g1 * u_new + g2 * v_new + g3 * acc_new
-
-
-@njit(cache=True, fastmath=FAST)
 def _rows_dot(rows, first, count, x, m, out):  # pragma: no cover - compiled
     """out[k] = rows[first + k, :m] · x[:m] for k < count, four rows per pass over x."""
     k = 0
@@ -328,12 +305,7 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
     cf = d.coefficients
     g1, g2, g3 = cf[G1], cf[G2], cf[G3]
     a0, a1, a2, a3, a4, a5 = cf[A0], cf[A1], cf[A2], cf[A3], cf[A4], cf[A5]
-    kh, beta, c_m, inv_ck = (
-        cf[CONTACT_STIFFNESS],
-        cf[RAYLEIGH_BETA],
-        cf[MASS_FACTOR],
-        cf[INVERSE_STIFFNESS_FACTOR],
-    )
+    kh, beta, c_m = cf[CONTACT_STIFFNESS], cf[RAYLEIGH_BETA], cf[MASS_FACTOR]
     n_spans = d.span_type.size
     n_b = d.schur_inverse_diagonal.shape[1]
     n_q = d.modal_offset[n_spans]
@@ -407,15 +379,15 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
             for j in range(d.n_coupled[t]):
                 x_c[s, j] = x_b[d.coupled[s, j]]
                 g_c[s, j] = e_vec[n_q + d.coupled[s, j]] - c_m * x_c[s, j]
-        # 2. Droppers' elongations of u_known = K̂⁻¹ M e + y / c_k.
+        # 2. Droppers' elongations of u_known = K̂⁻¹ M e + y.
         for q in range(n_drop):
             sd = d.dropper_span[q]
             td = d.span_type[sd]
             nc = d.n_coupled[td]
             acc = dl_known[q] + _dot(d.dropper_h[c, q], g_c[sd], nc) + _dot(d.dropper_c[q], x_c[sd], nc)
-            dl_known[q] = acc + inv_ck * (g1 * st.Bu[q] + g2 * st.Bv[q] + g3 * st.Ba[q])
+            dl_known[q] = acc + g1 * st.Bu[q] + g2 * st.Bv[q] + g3 * st.Ba[q]
             rate_term[q] = beta * d.dropper_rate[q] * (a1 * st.Bu[q] + a4 * st.Bv[q] + a5 * st.Ba[q])
-        # The contact point: h rows_q (D⁻¹ (e_q + M_qc g_c) + y_q / c_k) + h rows_c u_c.
+        # The contact point: h rows_q (D⁻¹ (e_q + M_qc g_c) + y_q) + h rows_c u_c.
         off = d.modal_offset[s_el]
         m = d.kept[c, s_el]
         inv_d = d.inverse_diagonal[t_el]
@@ -424,12 +396,12 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
         for i in range(m):
             hq = h[0] * r0[i] + h[1] * r1[i] + h[2] * r2[i] + h[3] * r3[i]
             h_q[i] = hq
-            wire += hq * (inv_d[i] * e_vec[off + i] + inv_ck * y[off + i])
+            wire += hq * (inv_d[i] * e_vec[off + i] + y[off + i])
         for j in range(d.n_coupled[t_el]):
             cj = d.coupled[s_el, j]
             hm = h[0] * m_qc[0, j] + h[1] * m_qc[1, j] + h[2] * m_qc[2, j] + h[3] * m_qc[3, j]
             hc = h[0] * rows_c[0, j] + h[1] * rows_c[1, j] + h[2] * rows_c[2, j] + h[3] * rows_c[3, j]
-            wire += hm * g_c[s_el, j] + hc * (x_b[cj] + inv_ck * y[n_q + cj])
+            wire += hm * g_c[s_el, j] + hc * (x_b[cj] + y[n_q + cj])
         pantograph_known(d, st.y_p, st.yd_p, st.ydd_p, rhs_p, y_known)
         gap_known = y_known[head] - d.wire_z[k] - wire
         c_cc = d.y_star[head]

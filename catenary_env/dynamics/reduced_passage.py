@@ -398,9 +398,10 @@ def _element_arrays(
 
 
 def _coefficients(reduced: ReducedSystem, nm: NewmarkConstants, c_k: float, c_m: float) -> np.ndarray:
-    """e1..e3, g1..g3, a0..a5, k_h, β, c_m, 1 / c_k: the next u_known is K̂⁻¹ M e + y / c_k with
+    """e1..e3, g1..g3, a0..a5, k_h, β, c_m, 1 / c_k: the next u_known is K̂⁻¹ M e + y with
     e = e1 u + e2 v + e3 a and y = g1 u + g2 v + g3 a. With Rayleigh damping K̂ = c_k K + c_m M, so
-    K̂⁻¹ (M x + K y) = K̂⁻¹ M (x - c_m y / c_k) + y / c_k: no product with K."""
+    K̂⁻¹ (M x + K z) = K̂⁻¹ M (x - c_m z / c_k) + z / c_k: no product with K (y = z / c_k, the
+    convention of the exact loop's ``_kernels._advance``)."""
     system = reduced.system
     x_coef = np.array(
         [nm.a0 + system.alpha * nm.a1, nm.a2 + system.alpha * nm.a4, nm.a3 + system.alpha * nm.a5]
@@ -409,7 +410,7 @@ def _coefficients(reduced: ReducedSystem, nm: NewmarkConstants, c_k: float, c_m:
     contact = system.static.layout.catenary.contact_stiffness
     newmark = [nm.a0, nm.a1, nm.a2, nm.a3, nm.a4, nm.a5]
     return np.concatenate(
-        [x_coef - (c_m / c_k) * g_coef, g_coef, newmark, [contact, system.beta, c_m, 1 / c_k]]
+        [x_coef - (c_m / c_k) * g_coef, g_coef / c_k, newmark, [contact, system.beta, c_m, 1 / c_k]]
     )
 
 
@@ -608,7 +609,7 @@ def _run_numpy(d: _Arrays, st: _Arrays, progress: Callable[[float], None] | None
     cf = d.coefficients
     e1, e2, e3, g1, g2, g3 = cf[:6]
     a0, a1, a2, a3, a4, a5 = cf[6:12]
-    kh, beta, c_m, inv_ck = cf[12:16]
+    kh, beta, c_m = cf[12:15]
     n_spans = d.span_type.size
     n_q = d.modal_offset[-1]
     head = d.y_star.size - 1
@@ -665,13 +666,13 @@ def _run_numpy(d: _Arrays, st: _Arrays, progress: Callable[[float], None] | None
                 + d.dropper_h[c, q, : cpl.size] @ g_c[sd]
                 + d.dropper_c[q, : cpl.size] @ x_b[cpl]
             )
-        dl_known += inv_ck * (g1 * st.Bu + g2 * st.Bv + g3 * st.Ba)
+        dl_known += g1 * st.Bu + g2 * st.Bv + g3 * st.Ba
         rate_term = beta * d.dropper_rate * (a1 * st.Bu + a4 * st.Bv + a5 * st.Ba)
         s, t, off, cpl = spans[s_el]
         m = kept[s_el]
         x_q = (e_vec[off : off + m] + g_c[s_el] @ d.coupling[t, : cpl.size, :m]) * d.inverse_diagonal[t, :m]
-        u_q = x_q + inv_ck * y[off : off + m]
-        u_c = x_b[cpl] + inv_ck * y[n_q + cpl]
+        u_q = x_q + y[off : off + m]
+        u_c = x_b[cpl] + y[n_q + cpl]
         wire = h @ (rows_q[:, :m] @ u_q + rows_c[:, : cpl.size] @ u_c)
         rhs_p = d.pantograph_mass @ (a0 * st.y_p + a2 * st.yd_p + a3 * st.ydd_p) + d.pantograph_damping @ (
             a1 * st.y_p + a4 * st.yd_p + a5 * st.ydd_p
@@ -697,9 +698,9 @@ def _run_numpy(d: _Arrays, st: _Arrays, progress: Callable[[float], None] | None
                     fq += lq * d.dropper_q_plain[q, :m]
             fq += (e_vec[n_q + cpl] - c_m * x_b[cpl]) @ d.coupling[t, : cpl.size, :m]
             p = slice(off, off + m)
-            u_new = fq * d.inverse_diagonal[t, :m] + inv_ck * y[p]
+            u_new = fq * d.inverse_diagonal[t, :m] + y[p]
             _newmark(u, v, acc_s, e_vec, y, p, u_new, cf)
-        _newmark(u, v, acc_s, e_vec, y, slice(n_q, None), x_b + inv_ck * y[n_q:], cf)
+        _newmark(u, v, acc_s, e_vec, y, slice(n_q, None), x_b + y[n_q:], cf)
         bu = dl_known + gm_dc * f + d.dropper_modal_flexibility[c][:, idx] @ lam
         du = bu - st.Bu
         ba = a0 * du - a2 * st.Bv - a3 * st.Ba
