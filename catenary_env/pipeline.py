@@ -35,10 +35,12 @@ from .model.design import Design, DesignError, check_design, check_speed
 from .model.options import ModellingOptions
 from .statics.shape_finding import ShapeFindingError, StaticSolution, find_shape
 
-PHYSICS_REVISION = 2
+PHYSICS_REVISION = 3
 """Raised whenever a change of the simulator changes its results, so that stored results of older
 revisions are not reused (it is part of :func:`model_fingerprint`). 2: the "study" fidelity runs the
-span-mode model (docs/performance.md, 'Model fidelities')."""
+span-mode model (docs/performance.md, 'Model fidelities'). 3: the modelling choices' defaults follow the
+EN 50318:2002 reference model (docs/model.md, 'Modelling choices'): uplift force = static contact force,
+continuous messenger, messenger free along the track at the supports, transverse-only wires."""
 
 
 def model_fingerprint(*records: object) -> str:

@@ -11,11 +11,11 @@ import pytest
 
 from catenary_env.validation import QUANTITIES, load_ranges, validate
 
-# Measured on 2026-11-22 (0.5 m contact-wire elements, 1 ms, 10 spans, central 2 analysed).
-KNOWN_MISSES = {
-    (250.0, "std"): "measured σ = 25.81 N, accepted 26–31 N (0.19 N low)",
-    (250.0, "actual_max"): "measured actual maximum = 168.75 N, accepted 175–210 N (6.25 N low)",
-}
+# None since physics revision 3, whose modelling choices follow the reference model's definition
+# (docs/model.md, 'Modelling choices'): all sixteen pass (0.5 m contact-wire elements, 1 ms, 10 spans,
+# central 2 analysed). Revision 2 missed two at 250 km/h: σ = 25.81 N (26–31) and the actual maximum
+# 168.75 N (175–210).
+KNOWN_MISSES: dict[tuple[float, str], str] = {}
 
 
 @pytest.fixture(scope="module")

@@ -2,9 +2,10 @@
 
 A vertical force F pushes the contact wire up at one point; the section's nonlinear static
 equilibrium is solved again with tension-only droppers (a dropper that would be compressed goes
-slack), and the uplift there gives the stiffness k(x) = F / uplift(x). The supports hold as in the
-dynamic model: wire ends and messenger supports fixed in x, support springs and steady arms
-vertical springs about their static reactions.
+slack), and the uplift there gives the stiffness k(x) = F / uplift(x). The wires are extensible; the
+supports hold as in the dynamic model: wire ends fixed in x, the messenger at the supports as the
+catenary's ``modelling.axial_restraint`` says, support springs and steady arms vertical springs about
+their static reactions.
 """
 
 from __future__ import annotations

@@ -6,15 +6,15 @@ Droppers enter K as axial springs k nnᵀ only: their geometric stiffness N/l ac
 dropper (horizontally) and is below 1e-3 of the wires' axial stiffness; leaving it out keeps a
 dropper's whole contribution one scalar force, which a slack dropper can switch off exactly.
 
-Dynamic boundary conditions: each wire is anchored in x at both ends of the section, the messenger
-is held in x at every support; the messenger supports and steady arms are vertical springs.
-
 The catenary's modelling choices (:class:`~catenary_env.model.options.ModellingOptions`; docs/model.md,
-'Modelling choices') change this: the messenger held in x at the section's ends only, wires that move
-vertically only at their static axial force, the droppers' geometric stiffness, Rayleigh damping over the
-wires only, slack droppers that keep their damping. The last two give a system whose damping is not
-C = αM + βK with slack droppers dropping their whole force (:attr:`LinearSystem.rayleigh` is False), which
-only the straightforward loop (:mod:`~catenary_env.dynamics.oracle`) integrates.
+'Modelling choices') decide the rest. By default the wires move vertically only, at their static axial
+force (``linearisation = "transverse-only"``: no x coordinate, no axial stiffness EA in K); the messenger
+supports and steady arms are vertical springs. Extensible wires keep their x coordinates, anchored at both
+ends of the section and, with ``axial_restraint = "every-support"``, at every messenger support. The
+other choices add the droppers' geometric stiffness, Rayleigh damping over the wires only, or slack
+droppers that keep their damping; the last two give a system whose damping is not C = αM + βK with slack
+droppers dropping their whole force (:attr:`LinearSystem.rayleigh` is False), which only the
+straightforward loop (:mod:`~catenary_env.dynamics.oracle`) integrates.
 """
 
 from __future__ import annotations

@@ -1,14 +1,13 @@
 """The lumped-mass pantograph: a chain of masses, springs and dampers from the roof to the head.
 
 Coordinates y are the masses' heights above the contact wire's nominal height at the supports
-(``catenary.contact_wire_height``), where the bottom (frame) spring is relaxed: as the pantograph rises, that
-spring takes part of the uplift force, so the mean contact force is the uplift less k₀ times the mean frame
-height (docs/model.md, 'Pantograph and contact'). The masses' own weight is carried by the static uplift
+(``catenary.contact_wire_height``), and the passages relax the bottom (frame) spring there. The static
+uplift force F₀ is, by default, the static contact force (``uplift_definition = "static-contact"``;
+docs/model.md, 'Modelling choices'): :func:`frame_force` gives the force on the frame that relaxes the
+frame spring where the pantograph stands at static equilibrium on the wire, so that the static contact
+force averaged over a span is F₀. With ``"nominal-height"`` F₀ itself acts on the frame, and the frame
+spring takes part of it as the pantograph rises. The masses' own weight is carried by the static uplift
 force, as in EN 50318's reference model, and does not appear.
-
-The modelling choice ``uplift_definition = "static-contact"`` reads the uplift force as the static contact
-force instead: the frame spring is relaxed where the pantograph stands at static equilibrium on the wire.
-The passages keep the coordinates above; :func:`frame_force` gives the force on the frame that realises it.
 """
 
 from __future__ import annotations

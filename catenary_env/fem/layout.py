@@ -6,15 +6,14 @@ dropper points and, between them, at equal intervals no longer than the fidelity
 Nodes are numbered in order of x so that the matrices are banded.
 
 The messenger passes over each interior support as over a saddle: the support's reaction (about a
-kilonewton) kinks it, by a few hundredths of a radian, over the bending length sqrt(EI/T) ≈ 0.1 m. A
-cubic (C¹) element cannot bend that sharply across one node; it spreads the kink over the adjacent
-elements, which then carry a spurious axial-strain swing and shift the dropper lengths by millimetres
-at a 1 m mesh. So the messenger's node at an interior support is a hinge: one position, and a
-separate position gradient for each side (6 coordinates). The modelling choice
-``messenger_support = "continuous"`` keeps one gradient there instead, and resolves the bend: the
-messenger gets nodes at 0.5, 1, 2 and 4 bending lengths on each side of the support, which brings the
-dropper lengths within a few tenths of a millimetre of a uniform 5 cm mesh (docs/model.md, 'Modelling
-choices').
+kilonewton) bends it, by a few hundredths of a radian, over the bending length sqrt(EI/T) ≈ 0.1 m. It is
+one continuous wire there (``messenger_support = "continuous"``, the default; docs/model.md, 'Modelling
+choices'), and a cubic (C¹) element cannot bend that sharply across one node of a 1 m mesh: it would spread
+the bend over the adjacent elements, whose spurious axial-strain swing shifts the dropper lengths by
+millimetres. So the messenger gets nodes at 0.5, 1, 2 and 4 bending lengths on each side of each interior
+support, which brings the dropper lengths within a few tenths of a millimetre of a uniform 5 cm mesh. The
+choice ``"hinge"`` models the sharp-kink limit instead: one position and a separate position gradient for
+each side (6 coordinates), which puts the messenger's chord some 4 mm lower at the supports.
 
 Dropper clamps and steady arms are point masses at their nodes, or, with ``clamp_masses = "distributed"``,
 spread along the wire they sit on: each span's clamps and one steady arm add their mass per metre of span to
@@ -215,7 +214,8 @@ def build_layout(
     cw_points = _subdivide(np.r_[support_x, dropper_x], contact_wire_element)
     mw_keys = np.r_[support_x, dropper_x[~on_stitch]]
     if c.modelling.messenger_support == "continuous":
-        mw_keys = np.r_[mw_keys, _bending_layer(interior, c, min(d[0], L - d[-1]))]
+        room = min(d[0], L - d[-1]) if d.size else L
+        mw_keys = np.r_[mw_keys, _bending_layer(interior, c, room)]
     if stitch is not None:
         mw_keys = np.r_[mw_keys, (interior[:, None] + [-half, half]).ravel()]
     mw_points = _subdivide(mw_keys, messenger_wire_element)

@@ -18,15 +18,25 @@ from dataclasses import dataclass, fields
 
 CHOICES: dict[str, tuple[str, ...]] = {
     "slack_dropper_damping": ("none", "stiffness-proportional"),
-    "uplift_definition": ("nominal-height", "static-contact"),
-    "messenger_support": ("hinge", "continuous"),
-    "axial_restraint": ("every-support", "section-ends"),
-    "linearisation": ("extensible", "transverse-only"),
+    "uplift_definition": ("static-contact", "nominal-height"),
+    "messenger_support": ("continuous", "hinge"),
+    "axial_restraint": ("section-ends", "every-support"),
+    "linearisation": ("transverse-only", "extensible"),
     "dropper_geometric_stiffness": ("excluded", "included"),
     "clamp_masses": ("point", "distributed"),
     "rayleigh_damping_scope": ("whole-system", "wires-only"),
 }
-"""The allowed values of every choice."""
+"""The allowed values of every choice, the default first (docs/model.md, 'Modelling choices', argues each
+default from the EN 50318:2002 reference model's definition and the physics)."""
+
+FORMER_DEFAULTS = {
+    "uplift_definition": "nominal-height",
+    "messenger_support": "hinge",
+    "axial_restraint": "every-support",
+    "linearisation": "extensible",
+}
+"""The choices whose default changed with physics revision 3 (catenary_env.pipeline.PHYSICS_REVISION), and
+their former default: ``ModellingOptions(**FORMER_DEFAULTS)`` is the model of revision 2."""
 
 
 @dataclass(frozen=True)
@@ -39,22 +49,23 @@ class ModellingOptions:
         What a slack dropper transmits: ``"none"``, nothing (its spring and its share β k of the Rayleigh
         damping both drop out); ``"stiffness-proportional"``, its damping β k Δl̇ stays while its spring force
         drops out (the damping matrix is that of the taut catenary).
-    uplift_definition : {"nominal-height", "static-contact"}
-        What the static uplift force F₀ means: ``"nominal-height"``, a force on the frame whose spring
+    uplift_definition : {"static-contact", "nominal-height"}
+        What the static uplift force F₀ means: ``"static-contact"``, the static contact force: the frame
+        spring is relaxed where the pantograph stands at static equilibrium on the wire, so the static
+        contact force averaged over a span equals F₀; ``"nominal-height"``, a force on the frame whose spring
         is relaxed at the contact wire's nominal height h₀, so the frame spring takes part of F₀ as the
-        pantograph rises; ``"static-contact"``, the static contact force: the frame spring is relaxed where
-        the pantograph stands at static equilibrium on the wire, so the static contact force averaged over
-        a span equals F₀.
-    messenger_support : {"hinge", "continuous"}
-        The messenger's node at an interior support: ``"hinge"``, one position and a separate slope on each
-        side; ``"continuous"``, one slope (a C¹ wire across the support).
-    axial_restraint : {"every-support", "section-ends"}
-        Where the messenger is held along the track in the dynamics: at every support, or only at the ends of
-        the section (the supports are then vertical springs only). The wires' ends are held either way.
-    linearisation : {"extensible", "transverse-only"}
-        ``"extensible"``: the wires keep their axial coordinates and axial stiffness EA in the linearised
-        dynamics; ``"transverse-only"``: the wires (and stitch wires) move vertically only, at their static
-        axial force (tensioned beams): no axial coordinate, no EA. The statics are extensible either way.
+        pantograph rises.
+    messenger_support : {"continuous", "hinge"}
+        The messenger's node at an interior support: ``"continuous"``, one slope (a C¹ wire across the
+        support, its bend resolved by the layout); ``"hinge"``, one position and a slope on each side.
+    axial_restraint : {"section-ends", "every-support"}
+        Where the messenger is held along the track, in the dynamics and the static analysis: only at the
+        ends of the section (the supports are vertical springs only), or at every support. The wires' ends
+        are held either way.
+    linearisation : {"transverse-only", "extensible"}
+        ``"transverse-only"``: the wires (and stitch wires) move vertically only, at their static axial force
+        (tensioned beams): no axial coordinate, no EA; ``"extensible"``: the wires keep their axial
+        coordinates and axial stiffness EA in the linearised dynamics. The statics are extensible either way.
     dropper_geometric_stiffness : {"excluded", "included"}
         Whether the droppers' geometric stiffness N/l (across the dropper, i.e. along the track) enters K.
         Included, it stays when the dropper goes slack; only the axial spring switches off.
@@ -67,10 +78,10 @@ class ModellingOptions:
     """
 
     slack_dropper_damping: str = "none"
-    uplift_definition: str = "nominal-height"
-    messenger_support: str = "hinge"
-    axial_restraint: str = "every-support"
-    linearisation: str = "extensible"
+    uplift_definition: str = "static-contact"
+    messenger_support: str = "continuous"
+    axial_restraint: str = "section-ends"
+    linearisation: str = "transverse-only"
     dropper_geometric_stiffness: str = "excluded"
     clamp_masses: str = "point"
     rayleigh_damping_scope: str = "whole-system"
