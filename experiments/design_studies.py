@@ -40,7 +40,7 @@ from catenary_env.fem.layout import CONTACT
 from catenary_env.pipeline import solve_static
 from catenary_env.problems import get_problem
 from catenary_env.problems.design_problem import DesignProblem, resolve_fidelity
-from optimizers.ga import GAOptions, GeneticAlgorithm
+from optimizers.ga import POPULATION_SIZES, GAOptions
 from optimizers.runner import optimize
 
 from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, study_dir, write_csv
@@ -300,7 +300,7 @@ def run_problem(name: str, config: Config, folder: Path, log: ResultLog) -> Path
         n_workers=config.workers,
         quiet=False,
     )
-    population = GeneticAlgorithm(_space(name), config.budget, config.seed, options).population_size
+    population = options.population_size or POPULATION_SIZES[name]
     history = [
         {
             "index": r.index,
@@ -350,13 +350,6 @@ def run_problem(name: str, config: Config, folder: Path, log: ResultLog) -> Path
     _write_statics(out, statics)
     (out / "summary.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
     return out
-
-
-def _space(name: str) -> Any:
-    from optimizers.catenary_adapter import catenary_problem
-    from optimizers.problem import GridSpace
-
-    return GridSpace.from_problem(catenary_problem(name))
 
 
 def _write_statics(out: Path, statics: dict[str, dict]) -> None:
