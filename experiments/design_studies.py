@@ -194,7 +194,7 @@ class _Runner:
         self.problem = problem
         self.log = log
         self.workers = workers
-        self.prefix = f"{problem.name}|{problem.fingerprint()}"
+        self.prefix = f"{problem.name}|{problem.store_fingerprint()}"
 
     def _key(self, kind: str, x: tuple[float, ...] | None, *rest: object) -> str:
         return "|".join([kind, self.prefix, "reference" if x is None else repr(x), *map(str, rest)])

@@ -77,5 +77,5 @@ def catenary_problem(name: str) -> CatenaryProblem:
         np.array(problem.lower, dtype=np.float64),
         np.array(problem.upper, dtype=np.float64),
         np.array(problem.step, dtype=np.float64),
-        problem.fingerprint(),
+        problem.store_fingerprint(),
     )

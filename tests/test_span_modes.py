@@ -49,8 +49,9 @@ def full_basis(system):
 
 def test_interior_spans_share_one_eigensolution(system):
     reduced = reduce_system(system, 200.0)
+    first, *interior, last = reduced.span_type.tolist()
     # first span, the interior ones, last span
-    assert reduced.span_type.tolist() == [0, 1, 1, 1, 2]
+    assert len(set(interior)) == 1 and len({first, interior[0], last}) == 3
     assert len(reduced.types) == 3
 
 

@@ -253,6 +253,12 @@ class DesignProblem:
             self.step.tolist(),
         )
 
+    def store_fingerprint(self) -> str:
+        """:meth:`fingerprint` with the named fidelities' settings (mesh, time step, the span-mode model's
+        cut-offs): the key of stored study results, which are never served after either changes."""
+        fidelities = {name: dataclasses.asdict(f) for name, f in FIDELITIES.items()}
+        return model_fingerprint(self.fingerprint(), fidelities)
+
     def reference_evaluation(
         self, speed_kmh: float = 300.0, fidelity: str | Fidelity = "study"
     ) -> Evaluation:
