@@ -435,13 +435,19 @@ def cli(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--full", action="store_true", help="study fidelity, 300 simulations, 5 seeds (hours)"
     )
+    parser.add_argument(
+        "--problems", nargs="+", default=list(PROBLEMS), choices=list(DESIGN_PROBLEMS),
+        help=f"default: {' '.join(PROBLEMS)}",
+    )  # fmt: skip
     parser.add_argument("--workers", type=int, default=1, help="worker processes per batch (default 1)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
     parser.add_argument(
         "--store", type=Path, default=None, help="run store (default: OUT/runs.sqlite, shared by the studies)"
     )
     args = parser.parse_args(argv)
-    config = Config(full=args.full, out=args.out, workers=args.workers, store=args.store)
+    config = Config(
+        full=args.full, out=args.out, workers=args.workers, store=args.store, problems=tuple(args.problems)
+    )
     print(report(main(config)))
     return 0
 

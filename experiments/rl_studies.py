@@ -126,20 +126,23 @@ class Config:
         Local worker processes for the GA's and the given designs' simulations (PPO steps in this process).
     store : Path or None
         The run store; default ``out/runs.sqlite``, shared by the studies.
+    problems : tuple of str
+        The design problems studied; default B1 and SW1 (quick: B1).
     """
 
     full: bool = False
     out: Path = DEFAULT_OUT
     workers: int = 1
     store: Path | None = None
+    problems: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not self.problems:
+            object.__setattr__(self, "problems", ("B1", "SW1") if self.full else ("B1",))
 
     @property
     def fidelity(self) -> str:
         return "study" if self.full else "test"
-
-    @property
-    def problems(self) -> tuple[str, ...]:
-        return ("B1", "SW1") if self.full else ("B1",)
 
     @property
     def seeds(self) -> tuple[int, ...]:
@@ -564,13 +567,20 @@ def _robust_figure(robust: list[dict[str, Any]], path: Path) -> None:
 def cli(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--full", action="store_true", help="study fidelity, B1 and SW1 (hours)")
+    parser.add_argument(
+        "--problems", nargs="+", default=[], choices=list(POPULATION_SIZES),
+        help="default: B1 SW1 (quick: B1)",
+    )  # fmt: skip
     parser.add_argument("--workers", type=int, default=1, help="worker processes for the GA (default 1)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
     parser.add_argument(
         "--store", type=Path, default=None, help="run store (default: OUT/runs.sqlite, shared by the studies)"
     )
     args = parser.parse_args(argv)
-    print(report(main(Config(full=args.full, out=args.out, workers=args.workers, store=args.store))))
+    config = Config(
+        full=args.full, out=args.out, workers=args.workers, store=args.store, problems=tuple(args.problems)
+    )
+    print(report(main(config)))
     return 0
 
 

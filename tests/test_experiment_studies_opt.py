@@ -164,3 +164,14 @@ def test_ioh_reader_refuses_a_foreign_header(tmp_path):
     path.write_text('"function evaluation" "current f(x)"\n1 40.0\n')
     with pytest.raises(ValueError, match="evaluations raw_y"):
         read_dat(path)
+
+
+def test_a_lane_of_the_full_studies_names_its_problems():
+    """experiments/full_studies.sh runs a lane per problem (``--problems``), then both together."""
+    assert rl_studies.Config(full=True).problems == ("B1", "SW1")
+    assert rl_studies.Config().problems == ("B1",)
+    assert rl_studies.Config(full=True, problems=("SW1",)).problems == ("SW1",)
+    with pytest.raises(SystemExit):  # argparse refuses a name that is no design problem
+        rl_studies.cli(["--problems", "X9"])
+    with pytest.raises(SystemExit):
+        optimizer_comparison.cli(["--problems", "X9"])
