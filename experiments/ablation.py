@@ -31,7 +31,7 @@ from catenary_env.model.presets import load_catenary, load_pantograph
 from catenary_env.pipeline import FIDELITIES, Fidelity, calibrate_uplift, en50367_mean_force, simulate
 from catenary_env.validation import validate
 
-from .common import DEFAULT_OUT, read_csv, study_dir, write_csv, write_json
+from .common import DEFAULT_OUT, read_csv, run_cli, study_dir, write_csv, write_json
 
 NAME = "ablation"
 EN_SPEEDS = (250.0, 300.0)  # km/h
@@ -294,4 +294,4 @@ def cli(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(cli())
+    raise SystemExit(run_cli(cli, "experiments.ablation"))

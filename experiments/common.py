@@ -4,8 +4,12 @@ from __future__ import annotations
 
 import csv
 import json
+import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
+
+from catenary_env.cli_errors import interruption, raise_on_sigterm
 
 DEFAULT_OUT = Path("results")
 STORE = "runs.sqlite"
@@ -55,3 +59,15 @@ def markdown_table(rows: list[dict[str, Any]], columns: list[tuple[str, str, str
     for row in rows:
         lines.append("| " + " | ".join(format(row[k], f) for k, _, f in columns) + " |")
     return "\n".join(lines)
+
+
+def run_cli(cli: Callable[[], int], name: str) -> int:
+    """Run a study's ``python -m`` entry point as ``catenary experiment`` does: Ctrl-C or SIGTERM end it with
+    one line, not a traceback (what was simulated is in the run store; run it again to resume)."""
+    raise_on_sigterm()
+    try:
+        return cli()
+    except KeyboardInterrupt as error:
+        what, status = interruption(error)
+        print(f"{name}: {what}; run it again to resume", file=sys.stderr)
+        return status

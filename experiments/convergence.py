@@ -17,7 +17,7 @@ from catenary_env.model.design import level_design
 from catenary_env.model.presets import load_catenary, load_pantograph
 from catenary_env.pipeline import Fidelity, simulate
 
-from .common import DEFAULT_OUT, markdown_table, read_csv, study_dir, write_csv
+from .common import DEFAULT_OUT, markdown_table, read_csv, run_cli, study_dir, write_csv
 
 NAME = "convergence"
 SETTINGS = ((1.0, 2e-3), (1.0, 1e-3), (0.5, 1e-3), (0.25, 1e-3), (0.5, 5e-4), (0.25, 5e-4))
@@ -109,4 +109,4 @@ def cli(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(cli())
+    raise SystemExit(run_cli(cli, "experiments.convergence"))

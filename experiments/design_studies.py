@@ -43,7 +43,7 @@ from catenary_env.problems.design_problem import DesignProblem, resolve_fidelity
 from optimizers.ga import POPULATION_SIZES, GAOptions
 from optimizers.runner import optimize
 
-from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, study_dir, write_csv
+from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, run_cli, study_dir, write_csv
 
 NAME = "design"
 PROBLEMS = ("B1", "B2", "B3", "SW1", "SW2", "SW3")
@@ -610,4 +610,4 @@ def cli(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(cli())
+    raise SystemExit(run_cli(cli, "experiments.design_studies"))

@@ -56,7 +56,7 @@ from optimizers.problem import GridSpace
 from optimizers.runner import optimize
 from optimizers.store import RunStore
 
-from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, study_dir, write_csv
+from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, run_cli, study_dir, write_csv
 from .design_evaluations import evaluate_designs
 from .iohprofiler import runs_from_rows, write_algorithm
 from .rl_studies import policy_options, train_policy
@@ -453,4 +453,4 @@ def cli(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(cli())
+    raise SystemExit(run_cli(cli, "experiments.optimizer_comparison"))

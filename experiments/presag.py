@@ -20,7 +20,7 @@ import numpy as np
 
 from catenary_env.problems import evaluate_problem, get_problem
 
-from .common import DEFAULT_OUT, markdown_table, read_csv, study_dir, write_csv
+from .common import DEFAULT_OUT, markdown_table, read_csv, run_cli, study_dir, write_csv
 
 NAME = "presag"
 PROBLEMS = ("BPresag", "SWPresag")
@@ -184,4 +184,4 @@ def cli(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(cli())
+    raise SystemExit(run_cli(cli, "experiments.presag"))

@@ -61,7 +61,7 @@ from optimizers.rl import DesignPolicy, EnvSpec, PPOOptions, design_for_speed, t
 from optimizers.runner import optimize
 from optimizers.store import RunStore
 
-from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, study_dir, write_csv
+from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, run_cli, study_dir, write_csv
 from .design_evaluations import evaluate_designs, mean_sigma_problem
 
 NAME = "rl"
@@ -585,4 +585,4 @@ def cli(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(cli())
+    raise SystemExit(run_cli(cli, "experiments.rl_studies"))

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from catenary_env.validation import validate
 
-from .common import DEFAULT_OUT, read_csv, study_dir, write_csv
+from .common import DEFAULT_OUT, read_csv, run_cli, study_dir, write_csv
 
 NAME = "validation"
 
@@ -100,4 +100,4 @@ def cli(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(cli())
+    raise SystemExit(run_cli(cli, "experiments.validation"))

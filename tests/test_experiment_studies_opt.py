@@ -175,3 +175,14 @@ def test_a_lane_of_the_full_studies_names_its_problems():
         rl_studies.cli(["--problems", "X9"])
     with pytest.raises(SystemExit):
         optimizer_comparison.cli(["--problems", "X9"])
+
+
+def test_an_interrupted_study_entry_point_ends_in_one_line(capsys):
+    """``python -m experiments.X`` (the lanes of full_studies.sh) ends on Ctrl-C as ``catenary`` does."""
+    from experiments.common import run_cli
+
+    def interrupted() -> int:
+        raise KeyboardInterrupt
+
+    assert run_cli(interrupted, "experiments.x") == 130
+    assert capsys.readouterr().err.strip() == "experiments.x: interrupted; run it again to resume"
