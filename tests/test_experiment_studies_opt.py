@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -167,7 +168,8 @@ def test_ioh_reader_refuses_a_foreign_header(tmp_path):
 
 
 def test_a_lane_of_the_full_studies_names_its_problems():
-    """experiments/full_studies.sh runs a lane per problem (``--problems``), then both together."""
+    """experiments/full_studies.sh runs each study on one problem at a time (``--problems``) in two lanes,
+    then both studies on both problems."""
     assert rl_studies.Config(full=True).problems == ("B1", "SW1")
     assert rl_studies.Config().problems == ("B1",)
     assert rl_studies.Config(full=True, problems=("SW1",)).problems == ("SW1",)
@@ -175,6 +177,11 @@ def test_a_lane_of_the_full_studies_names_its_problems():
         rl_studies.cli(["--problems", "X9"])
     with pytest.raises(SystemExit):
         optimizer_comparison.cli(["--problems", "X9"])
+    script = Path(__file__).parents[1] / "experiments" / "full_studies.sh"
+    subprocess.run(["bash", "-n", str(script)], check=True)  # it parses
+    lanes = [line.split()[1:] for line in script.read_text().splitlines() if line.startswith("lane ")]
+    pairs = sorted((lane[i], lane[i + 1]) for lane in lanes for i in (0, 2))
+    assert pairs == [(s, p) for s in ("optimizer_comparison", "rl_studies") for p in ("B1", "SW1")]
 
 
 def test_an_interrupted_study_entry_point_ends_in_one_line(capsys):
