@@ -5,6 +5,7 @@
 # problems, which replays every run from the store (nothing is simulated again) and writes their combined
 # results, and the report. A simulation of SW1 costs about 1.5 times one of B1 and the two studies about
 # the same number of simulations, so each lane takes one study of each problem: both take about as long.
+The optimiser comparison, the headline, comes first in both.
 # Each command resumes from OUT/runs.sqlite, so this script can be killed and started again at any time;
 # it takes days on two cores (docs/performance.md). Usage: experiments/full_studies.sh [OUT] [WORKERS]
 set -euo pipefail
@@ -18,7 +19,7 @@ lane() {  # lane STUDY PROBLEM STUDY PROBLEM
     python -m "experiments.$1" --full --problems "$2" --workers 1 --out "$OUT"
     python -m "experiments.$3" --full --problems "$4" --workers 1 --out "$OUT"
 }
-lane rl_studies SW1 optimizer_comparison B1 > "$OUT/lane-1.log" 2>&1 &
+lane optimizer_comparison B1 rl_studies SW1 > "$OUT/lane-1.log" 2>&1 &
 one=$!
 lane optimizer_comparison SW1 rl_studies B1 > "$OUT/lane-2.log" 2>&1 &
 two=$!
