@@ -35,9 +35,9 @@ Outputs (``results/rl/``): ``steps.csv`` (every training step), ``ga_runs.csv``,
 
 Settings. Full: the study fidelity, B1 and SW1, 1000 steps × 3 seeds for the learning curves, 2000 steps
 for the speed-conditioned policy (rollouts of 32 steps), 1000 simulations per GA run (the study's
-population) at 200, 260, 300 and 320 km/h, 300 evaluations for the mean-σ GA, each at the 7 speeds
-200–320 km/h every 20 km/h. Quick: the "test" fidelity, B1 only, about ten simulations per run, rollouts of
-4 steps, a GA population of 6 (a smoke test, not a result).
+population) at 200, 260, 300 and 320 km/h, 300 evaluations for the mean-σ GA (a population of 30, so
+ten generations), each at the 7 speeds 200–320 km/h every 20 km/h. Quick: the "test" fidelity, B1 only,
+about ten simulations per run, rollouts of 4 steps, a GA population of 6 (a smoke test, not a result).
 
     python -m experiments.rl_studies [--full] [--workers 2] [--out results]
 """
@@ -70,6 +70,9 @@ SPEED_RANGE = (200.0, 320.0)
 GA_SPEEDS = (200.0, 260.0, 320.0)
 POLICY_SPREAD = 0.2
 """Standard deviation of the untrained policy's actions, action units (0.2 = 4 mm of height on B1, SW1)."""
+MEAN_POPULATION = 30
+"""Population of the mean-σ GA: its 300 evaluations (2100 simulations) then make ten generations, where
+the study's population of 80 or 100 would make two or three."""
 
 
 def policy_options(n_steps: int) -> PPOOptions:
@@ -164,7 +167,7 @@ class Config:
 
     @property
     def ga_budget(self) -> int:
-        """Simulations of each single-speed GA run; evaluations of the mean-σ GA run."""
+        """Simulations of each single-speed GA run."""
         return 1000 if self.full else 12
 
     @property
@@ -174,6 +177,11 @@ class Config:
 
     def ga_options(self, problem: str) -> GAOptions:
         return GAOptions(population_size=POPULATION_SIZES[problem] if self.full else 6)
+
+    @property
+    def mean_ga_options(self) -> GAOptions:
+        """The mean-σ GA's: a population of :data:`MEAN_POPULATION` (quick: 6)."""
+        return GAOptions(population_size=MEAN_POPULATION if self.full else 6)
 
     @property
     def speeds_kmh(self) -> tuple[float, ...]:
@@ -311,7 +319,7 @@ def _robust_design(
     mean_problem = mean_sigma_problem(problem, config.speeds_kmh)
     result = optimize(
         mean_problem, "ga", config.mean_budget, 0, speed_kmh=float(np.mean(config.speeds_kmh)),
-        fidelity=config.fidelity, options=config.ga_options(problem), store=store, resume=True,
+        fidelity=config.fidelity, options=config.mean_ga_options, store=store, resume=True,
         start_if_none=True, n_workers=config.workers, quiet=not config.full,
     )  # fmt: skip
     speeds = config.speeds_kmh

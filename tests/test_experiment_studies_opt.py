@@ -193,3 +193,10 @@ def test_an_interrupted_study_entry_point_ends_in_one_line(capsys):
 
     assert run_cli(interrupted, "experiments.x") == 130
     assert capsys.readouterr().err.strip() == "experiments.x: interrupted; run it again to resume"
+
+
+def test_the_full_mean_sigma_ga_makes_ten_generations_within_its_budget():
+    config = rl_studies.Config(full=True)
+    options = config.mean_ga_options
+    children = options.population_size - options.elite_count  # evaluated per generation
+    assert (config.mean_budget - options.population_size) / children >= 10
