@@ -424,7 +424,7 @@ def report(folder: Path) -> str:
     done = _load(folder)
     if not done:
         return f"no design study data under {folder}"
-    headline, optima, alphas, speed_rows = [], [], [], []
+    headline, optima, alphas, speed_rows, dropper_rows = [], [], [], [], []
     for s, sub in done:
         headline.append(
             {
@@ -445,6 +445,7 @@ def report(folder: Path) -> str:
             row |= {f"ref{force:.0f}": ref, f"opt{force:.0f}": opt, f"red{force:.0f}": _reduction(ref, opt)}
         alphas.append(row)
         speed_rows += [{"problem": s["problem"], **r} for r in read_csv(sub / "speed.csv")]
+        dropper_rows += _dropper_force_rows(s["problem"], read_csv(sub / "droppers.csv"))
         _problem_figure(s, sub)
     fidelity = done[0][0]["fidelity"]
     confirm = done[0][0]["confirm_fidelity"]
@@ -481,6 +482,17 @@ def report(folder: Path) -> str:
                     )
                 ],
             ),
+            "Static dropper forces of the central span (N), at the design's dropper positions:",
+            markdown_table(
+                dropper_rows,
+                [
+                    ("problem", "problem", "s"),
+                    ("design", "design", "s"),
+                    ("forces", "first to last dropper", "s"),
+                    ("min", "smallest", ".1f"),
+                    ("max", "largest", ".1f"),
+                ],
+            ),
             "σ (N) against speed:",
             _speed_table(speed_rows),
         ]
@@ -489,6 +501,24 @@ def report(folder: Path) -> str:
     _speed_figure(speed_rows, folder / "speed.png")
     _convergence_figure(done, folder / "convergence.png")
     return text
+
+
+def _dropper_force_rows(problem: str, droppers: list[dict]) -> list[dict[str, Any]]:
+    """One row per design: its static dropper forces in order along the span, smallest and largest."""
+    rows = []
+    for design in ("reference", "optimum"):
+        forces = [r["force_N"] for r in droppers if r["design"] == design]
+        if forces:
+            rows.append(
+                {
+                    "problem": problem,
+                    "design": design,
+                    "forces": ", ".join(f"{f:.1f}" for f in forces),
+                    "min": min(forces),
+                    "max": max(forces),
+                }
+            )
+    return rows
 
 
 def _speed_table(rows: list[dict]) -> str:

@@ -91,6 +91,8 @@ def test_report_needs_only_the_data(quick_study, monkeypatch):
     monkeypatch.setattr(design_studies, "get_problem", None)
     text = design_studies.report(folder)
     assert "| B1 |" in text and "| SW3 |" in text and "α ref. 100 N" in text
+    forces = [r["force_N"] for r in read_csv(folder / "B1" / "droppers.csv") if r["design"] == "reference"]
+    assert f"| B1 | reference | {', '.join(f'{f:.1f}' for f in forces)} |" in text  # static dropper forces
     assert (folder / "speed.png").exists() and (folder / "SW3" / "design.png").exists()
 
 
