@@ -11,7 +11,7 @@ The optimiser comparison, the headline, comes first in both.
 set -euo pipefail
 OUT="${1:-results}"
 WORKERS="${2:-2}"
-export OPENBLAS_NUM_THREADS=1
+export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1  # one core per process (PPO's torch too)
 python -m experiments.design_studies --full --problems B1 SW1 --workers "$WORKERS" --out "$OUT"
 python -m experiments.design_studies --full --problems B2 SW2 B3 SW3 --workers "$WORKERS" --out "$OUT"
 
