@@ -334,6 +334,12 @@ def train_design_policy(
         recorder = RunRecorder(run_store, run_id, config, space, "env", progress, resumed)
         vec_env = _vector_env(env_spec, recorder, space, settings)
         stack.callback(vec_env.close)
+        # One torch thread: a 64 x 64 network gains nothing from more, and a fixed thread count keeps
+        # torch's sums in one order whatever the core count, so that a resumed run replays its steps.
+        import torch
+
+        stack.callback(torch.set_num_threads, torch.get_num_threads())
+        torch.set_num_threads(1)
         model = sb3.PPO(
             "MlpPolicy", vec_env, learning_rate=settings.learning_rate, n_steps=settings.n_steps,
             batch_size=settings.batch_size, n_epochs=settings.n_epochs, ent_coef=settings.ent_coef,

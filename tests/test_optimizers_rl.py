@@ -116,6 +116,38 @@ def test_ppo_resumes_an_interrupted_training(tmp_path):
         )
 
 
+def test_ppo_replays_whatever_the_callers_torch_threads(tmp_path, monkeypatch):
+    """PPO trains on one torch thread (and gives the caller's setting back), so a run resumed by a
+    process with another thread count asks the same designs and replays."""
+    import torch
+    from stable_baselines3 import PPO
+
+    threads = []  # torch's thread count as each training starts
+    learn = PPO.learn
+
+    def counted_learn(self, *args, **kwargs):
+        threads.append(torch.get_num_threads())
+        return learn(self, *args, **kwargs)
+
+    monkeypatch.setattr(PPO, "learn", counted_learn)
+    store = tmp_path / "runs.sqlite"
+    caller = torch.get_num_threads()
+    try:
+        torch.set_num_threads(2)
+        _, full = train_design_policy(SINGLE_SPEED, PROBLEM, budget=96, seed=1, options=SMALL, store=store)
+        assert torch.get_num_threads() == 2
+        with sqlite3.connect(store) as connection:
+            connection.execute("DELETE FROM evaluations WHERE idx >= 50")
+        torch.set_num_threads(1)
+        _, resumed = train_design_policy(
+            SINGLE_SPEED, PROBLEM, budget=96, seed=1, options=SMALL, store=store, resume=True
+        )
+    finally:
+        torch.set_num_threads(caller)
+    assert threads == [1, 1]
+    assert _comparable(resumed.history) == _comparable(full.history)
+
+
 @pytest.mark.slow  # 50 s of PPO training; the budget and resume tests above keep PPO in every run
 def test_speed_conditioned_policy_learns_the_design_per_speed():
     options = PPOOptions(n_steps=256, batch_size=64, n_epochs=10, learning_rate=1e-3, net_arch=(32, 32))
