@@ -1,16 +1,17 @@
 #!/usr/bin/env bash
+set -euo pipefail
 # The full studies of docs/problems.md, 'Experiments': the six design studies (B1 and SW1 first, the
 # headline), then the optimiser comparison and the RL studies of B1 and SW1 in two lanes, each a single
 # process on one core (PPO steps its environment in one process), then both studies once more over both
 # problems, which replays every run from the store (nothing is simulated again) and writes their combined
 # results, and the report. A simulation of SW1 costs about 1.5 times one of B1 and the two studies about
 # the same number of simulations, so each lane takes one study of each problem: both take about as long.
-The optimiser comparison, the headline, comes first in both.
+# The optimiser comparison, the headline, comes first in both.
 # Each command resumes from OUT/runs.sqlite, so this script can be killed and started again at any time;
 # it takes days on two cores (docs/performance.md). Usage: experiments/full_studies.sh [OUT] [WORKERS]
-set -euo pipefail
 OUT="${1:-results}"
 WORKERS="${2:-2}"
+mkdir -p "$OUT"
 export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1  # one core per process (PPO's torch too)
 python -m experiments.design_studies --full --problems B1 SW1 --workers "$WORKERS" --out "$OUT"
 python -m experiments.design_studies --full --problems B2 SW2 B3 SW3 --workers "$WORKERS" --out "$OUT"

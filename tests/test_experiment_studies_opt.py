@@ -177,11 +177,54 @@ def test_a_lane_of_the_full_studies_names_its_problems():
         rl_studies.cli(["--problems", "X9"])
     with pytest.raises(SystemExit):
         optimizer_comparison.cli(["--problems", "X9"])
+
+
+def _run_full_studies(tmp_path: Path, fail: str = "") -> tuple[subprocess.CompletedProcess, list[str]]:
+    """experiments/full_studies.sh with a stand-in ``python`` that logs its arguments (and fails on
+    those containing ``fail``): the commands it runs, each study's in the order it runs them."""
+    bin_dir, log = tmp_path / "bin", tmp_path / "calls.txt"
+    bin_dir.mkdir()
+    stub = bin_dir / "python"
+    failing = f'case "$*" in *"{fail}"*) exit 3;; esac\n' if fail else ""
+    stub.write_text(f'#!/bin/sh\necho "$*" >> {log}\n{failing}')
+    stub.chmod(0o755)
     script = Path(__file__).parents[1] / "experiments" / "full_studies.sh"
-    subprocess.run(["bash", "-n", str(script)], check=True)  # it parses
-    lanes = [line.split()[1:] for line in script.read_text().splitlines() if line.startswith("lane ")]
-    pairs = sorted((lane[i], lane[i + 1]) for lane in lanes for i in (0, 2))
-    assert pairs == [(s, p) for s in ("optimizer_comparison", "rl_studies") for p in ("B1", "SW1")]
+    run = subprocess.run(
+        ["bash", str(script), str(tmp_path / "out"), "2"],
+        env={"PATH": f"{bin_dir}:/usr/bin:/bin"}, capture_output=True, text=True, check=False,
+    )  # fmt: skip
+    return run, log.read_text().splitlines() if log.exists() else []
+
+
+def test_the_full_studies_script_runs_every_study_in_its_order(tmp_path):
+    run, calls = _run_full_studies(tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert run.stderr == ""
+    out = f"--out {tmp_path / 'out'}"
+    assert calls[:2] == [
+        f"-m experiments.design_studies --full --problems B1 SW1 --workers 2 {out}",
+        f"-m experiments.design_studies --full --problems B2 SW2 B3 SW3 --workers 2 {out}",
+    ]
+    lane = [c.split()[1] + " " + c.split()[4] for c in calls[2:6]]  # two lanes, interleaved
+    assert sorted(lane) == [
+        f"experiments.{s} {p}" for s in ("optimizer_comparison", "rl_studies") for p in ("B1", "SW1")
+    ]
+    assert lane.index("experiments.optimizer_comparison B1") < lane.index("experiments.rl_studies SW1")
+    assert lane.index("experiments.optimizer_comparison SW1") < lane.index("experiments.rl_studies B1")
+    assert calls[6:] == [
+        f"-m experiments.optimizer_comparison --full --workers 2 {out}",
+        f"-m experiments.rl_studies --full --workers 2 {out}",
+        f"-m catenary_env.cli report --out {tmp_path / 'out'}",
+    ]
+
+
+def test_the_full_studies_script_stops_when_a_lane_fails(tmp_path):
+    run, calls = _run_full_studies(tmp_path, fail="experiments.optimizer_comparison --full --problems B1")
+    assert run.returncode == 1
+    assert run.stderr.strip().startswith("a lane failed")
+    assert not any("rl_studies --full --problems SW1" in c for c in calls)  # the rest of its lane
+    assert any("rl_studies --full --problems B1" in c for c in calls)  # the other lane ran
+    assert len(calls) == 5  # and nothing after the lanes
 
 
 def test_an_interrupted_study_entry_point_ends_in_one_line(capsys):
