@@ -29,6 +29,7 @@ from catenary_env.cli_errors import UsageError, check_output_path, interruption,
 
 from . import ga, nevergrad_adapters  # noqa: F401  (register the built-in optimisers)
 from .base import OPTIMIZERS, OptimizationResult
+from .cli_runs import add_runs_parser, list_runs
 from .progress import LOG_INTERVAL
 from .store import StoreError
 
@@ -181,10 +182,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 
 def add_commands(subparsers: Any) -> dict[str, Callable[[argparse.Namespace], int]]:
-    """Add ``catenary optimize``: the ``catenary_env.commands`` entry point of this package."""
+    """Add ``catenary optimize``, ``propose`` and ``runs``: the ``catenary_env.commands`` entry point of this
+    package."""
     add_parser(subparsers)
     add_propose_parser(subparsers)
-    return {"optimize": run, "propose": propose}
+    add_runs_parser(subparsers, DEFAULT_STORE)
+    return {"optimize": run, "propose": propose, "runs": list_runs}
 
 
 def run(args: argparse.Namespace) -> int:

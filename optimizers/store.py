@@ -289,6 +289,19 @@ class RunStore:
         names = [column[0] for column in cursor.description]
         return [dict(zip(names, row, strict=True)) for row in cursor.fetchall()]
 
+    def run_progress(self) -> list[dict[str, object]]:
+        """Every run's columns (:meth:`runs`) and its progress: ``evaluations`` stored, ``simulations``
+        charged to its budget, ``best_sigma`` (N, its best feasible σ, or None) and ``last_evaluation_at``."""
+        cursor = self._connection.execute(
+            "SELECT r.*, count(e.idx) AS evaluations, coalesce(sum(e.charged), 0) AS simulations, "
+            "min(CASE WHEN e.feasible THEN e.sigma END) AS best_sigma, "
+            "max(e.created_at) AS last_evaluation_at "
+            "FROM runs AS r LEFT JOIN evaluations AS e ON e.run_id = r.run_id "
+            "GROUP BY r.run_id ORDER BY r.run_id"
+        )
+        names = [column[0] for column in cursor.description]
+        return [dict(zip(names, row, strict=True)) for row in cursor.fetchall()]
+
     # -- evaluations ---------------------------------------------------------------------------------------
 
     def add_evaluation(

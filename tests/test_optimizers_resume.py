@@ -129,3 +129,39 @@ def test_module_entry_point_help():
     completed = subprocess.run([sys.executable, "-m", "optimizers", "--help"], cwd=REPO, capture_output=True,
                                text=True, timeout=60)  # fmt: skip
     assert completed.returncode == 0 and "--budget" in completed.stdout
+
+
+def test_catenary_runs_lists_each_runs_progress(tmp_path, capsys):
+    from catenary_env.cli import main
+    from optimizers.ga import GAOptions
+    from optimizers.store import RunConfig, RunStore
+
+    store = tmp_path / "runs.sqlite"
+    done = optimize(
+        "synthetic-quadratic", "ga", 24, seed=1, options=GAOptions(population_size=8), store=store
+    )
+    with RunStore(store) as runs:  # a run interrupted before its first evaluation
+        runs.start_run(RunConfig("ga", "synthetic-quadratic", 50, 2, None, "test", "{}", "0.1.0"))
+    assert main(["runs", "--store", str(store)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    expected = f"1 ga synthetic-quadratic 1 300 km/h study {done.n_simulations}/24"
+    assert " ".join(lines[1].split()[:8]) == expected
+    assert lines[1].split()[8:10] == [f"{done.best_sigma:.3f}", f"{done.stop_reason},"]
+    assert lines[2].split()[4] == "range" and lines[2].endswith("not finished, no evaluation")
+    assert lines[-1].endswith(
+        "2 run(s) in " + str(store) + ", 1 not finished (interrupted, or still running)"
+    )
+    assert main(["runs", "--store", str(store), "--json"]) == 0
+    first, second = json.loads(capsys.readouterr().out)
+    assert first["simulations"] == done.n_simulations and first["best_sigma"] == done.best_sigma
+    assert first["evaluations"] == len(done.history) and first["stop_reason"] == done.stop_reason
+    assert second["simulations"] == 0 and second["best_sigma"] is None and second["finished_at"] is None
+
+
+def test_catenary_runs_refuses_a_missing_store_without_making_one(tmp_path, capsys):
+    from catenary_env.cli import main
+
+    missing = tmp_path / "none.sqlite"
+    assert main(["runs", "--store", str(missing)]) == 2
+    assert f"--store {missing}: no such file" in capsys.readouterr().err
+    assert not missing.exists()

@@ -1,0 +1,94 @@
+"""``catenary runs``: the runs a run store holds and how far each has got.
+
+    catenary runs [--store PATH] [--json]
+
+For the long studies (docs/problems.md, 'Experiments'): which runs are done, which stopped part-way (an
+interrupted run resumes with ``--resume``, or by running its study again), their simulations against the
+budget and the best σ so far. It only reads the store, so it can watch runs that are writing into it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+from catenary_env.cli_errors import UsageError, print_error
+
+from .store import RunStore, StoreError
+
+__all__ = ["add_runs_parser", "list_runs"]
+
+COLUMNS = ("run", "optimizer", "problem", "seed", "speed", "fidelity", "simulations", "best σ (N)", "status")
+
+
+def add_runs_parser(subparsers: Any, default_store: str) -> argparse.ArgumentParser:
+    """Add ``runs`` to the sub-commands of the ``catenary`` command."""
+    parser: argparse.ArgumentParser = subparsers.add_parser(
+        "runs",
+        help="the runs in a run store: simulations against the budget, best sigma, finished or not",
+        description="List the runs of an SQLite run store (catenary optimize's, or the studies' "
+        "results/runs.sqlite) with their simulations against the budget, the best feasible sigma so far (N) "
+        "and whether each finished (and why it stopped) or not: a run not finished was interrupted, or is "
+        "still running.",
+    )
+    parser.add_argument(
+        "--store", default=default_store, metavar="PATH", help=f"the run store (default: ./{default_store})"
+    )
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        help="print a JSON list, one object per run: its stored settings and progress (sigma in N, speed in "
+        "km/h, null for a speed range)",
+    )
+    return parser
+
+
+def list_runs(args: argparse.Namespace) -> int:
+    """Execute ``runs``; return the exit status (0; 2 for a store that is missing or not a run store)."""
+    try:
+        if not Path(args.store).is_file():
+            raise UsageError(f"--store {args.store}: no such file (a run store is made by catenary optimize)")
+        store = RunStore(args.store)
+        try:
+            runs = store.run_progress()
+        finally:
+            store.close()
+    except (UsageError, StoreError) as error:
+        if getattr(args, "debug", False):
+            raise
+        return print_error("runs", error)
+    print(json.dumps(runs) if args.json else _table(runs, args.store))
+    return 0
+
+
+def _table(runs: list[dict[str, Any]], store: str) -> str:
+    if not runs:
+        return f"{store}: no run"
+    rows = [COLUMNS] + [_row(r) for r in runs]
+    widths = [max(len(row[i]) for row in rows) for i in range(len(COLUMNS))]
+    lines = ["  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip() for row in rows]
+    unfinished = sum(r["finished_at"] is None for r in runs)
+    lines.append(f"{len(runs)} run(s) in {store}, {unfinished} not finished (interrupted, or still running)")
+    return "\n".join(lines)
+
+
+def _row(run: dict[str, Any]) -> tuple[str, ...]:
+    speed = "range" if run["speed_kmh"] is None else f"{run['speed_kmh']:g} km/h"
+    best = "–" if run["best_sigma"] is None else f"{run['best_sigma']:.3f}"
+    if run["finished_at"] is not None:
+        status = f"{run['stop_reason']}, {_time(run['finished_at'])}"
+    elif run["last_evaluation_at"] is not None:
+        status = f"not finished, last evaluation {_time(run['last_evaluation_at'])}"
+    else:
+        status = "not finished, no evaluation"
+    return (
+        str(run["run_id"]), run["optimizer"], run["problem"], str(run["seed"]), speed, run["fidelity"],
+        f"{run['simulations']}/{run['budget']}", best, status,
+    )  # fmt: skip
+
+
+def _time(stamp: str) -> str:
+    """``2026-12-01T11:58:39.863+00:00`` as ``2026-12-01 11:58 UTC``."""
+    return f"{stamp[:10]} {stamp[11:16]} UTC" if stamp.endswith("+00:00") else stamp
