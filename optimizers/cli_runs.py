@@ -50,7 +50,7 @@ def list_runs(args: argparse.Namespace) -> int:
     try:
         if not Path(args.store).is_file():
             raise UsageError(f"--store {args.store}: no such file (a run store is made by catenary optimize)")
-        store = RunStore(args.store)
+        store = RunStore(args.store, read_only=True)
         try:
             runs = store.run_progress()
         finally:

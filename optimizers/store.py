@@ -162,19 +162,27 @@ class RunStore:
     ----------
     path : str or path-like
         The SQLite file, created if absent; ``":memory:"`` for a store that lives as long as the object.
+    read_only : bool
+        Open an existing store without writing to it (a store that runs are writing into can be read).
 
     Raises
     ------
     StoreError
-        The file is not SQLite, or an SQLite database that is not a run store of this schema version.
+        The file is not SQLite, or an SQLite database that is not a run store of this schema version;
+        read-only, a file that holds no store yet.
     """
 
-    def __init__(self, path: str | os.PathLike[str]) -> None:
+    def __init__(self, path: str | os.PathLike[str], read_only: bool = False) -> None:
         self.path = str(path)
+        self.read_only = read_only
         if self.path != ":memory:":
             _check_header(Path(self.path))
         try:
-            self._connection = sqlite3.connect(self.path, timeout=60.0)
+            if read_only:
+                uri = f"{Path(self.path).resolve().as_uri()}?mode=ro"
+                self._connection = sqlite3.connect(uri, uri=True, timeout=60.0)
+            else:
+                self._connection = sqlite3.connect(self.path, timeout=60.0)
             self._open()
         except sqlite3.DatabaseError as error:
             if hasattr(self, "_connection"):
@@ -186,6 +194,9 @@ class RunStore:
         application_id = connection.execute("PRAGMA application_id").fetchone()[0]
         n_tables = connection.execute("SELECT count(*) FROM sqlite_master").fetchone()[0]
         if application_id == 0 and n_tables == 0:
+            if self.read_only:
+                connection.close()
+                raise StoreError(f"{self.path}: an empty file, not a run store (yet)")
             self._create()
         elif application_id != APPLICATION_ID:
             connection.close()
@@ -201,7 +212,7 @@ class RunStore:
                 f"{self.path}: run store schema version {version}, this code reads version {SCHEMA_VERSION}"
             )
         self._check_integrity()
-        if self.path != ":memory:":
+        if self.path != ":memory:" and not self.read_only:
             # WAL: a committed evaluation survives a SIGKILL; NORMAL sync is durable against a process
             # crash (only a power cut can lose the last commits).
             connection.execute("PRAGMA journal_mode=WAL")

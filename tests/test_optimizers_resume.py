@@ -158,10 +158,15 @@ def test_catenary_runs_lists_each_runs_progress(tmp_path, capsys):
     assert second["simulations"] == 0 and second["best_sigma"] is None and second["finished_at"] is None
 
 
-def test_catenary_runs_refuses_a_missing_store_without_making_one(tmp_path, capsys):
+def test_catenary_runs_refuses_a_missing_or_empty_store_without_writing(tmp_path, capsys):
     from catenary_env.cli import main
 
     missing = tmp_path / "none.sqlite"
     assert main(["runs", "--store", str(missing)]) == 2
     assert f"--store {missing}: no such file" in capsys.readouterr().err
     assert not missing.exists()
+    empty = tmp_path / "empty.sqlite"
+    empty.touch()
+    assert main(["runs", "--store", str(empty)]) == 2
+    assert "an empty file, not a run store" in capsys.readouterr().err
+    assert empty.stat().st_size == 0  # read only: no schema written into it
