@@ -1,0 +1,35 @@
+"""The README's headline table of the design studies says what the committed results say (no drift)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+DESIGN = ROOT / "results" / "design"
+
+
+def _headline_rows() -> dict[str, list[str]]:
+    """README rows ``| problem | σ ref | σ opt | reduction | confirmed | generations | simulations |``."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    table = text[text.index("| problem | σ reference (N) | σ optimum (N) | reduction |") :].split("\n\n")[0]
+    rows = [[cell.strip() for cell in line.strip("|").split("|")] for line in table.splitlines()[2:]]
+    return {row[0]: row[1:] for row in rows}
+
+
+def _reduction(reference: float, optimum: float) -> float:
+    return 100.0 * (1.0 - optimum / reference)
+
+
+def test_the_readme_headline_table_is_the_committed_design_results():
+    rows = _headline_rows()
+    done = sorted(p.parent.name for p in DESIGN.glob("*/summary.json"))
+    assert sorted(rows) == done  # every committed study, and no other
+    for problem, cells in rows.items():
+        s = json.loads((DESIGN / problem / "summary.json").read_text(encoding="utf-8"))
+        ref, opt = s["sigma_reference_N"], s["sigma_optimum_N"]
+        ref_exact, opt_exact = s["sigma_reference_confirmed_N"], s["sigma_optimum_confirmed_N"]
+        assert cells[:3] == [f"{ref:.2f}", f"{opt:.2f}", f"{_reduction(ref, opt):.1f} %"], problem
+        confirmed = f"{ref_exact:.2f} → {opt_exact:.2f} ({_reduction(ref_exact, opt_exact):.1f} %)"
+        assert cells[3] == confirmed, problem
+        assert cells[4:] == [str(s["generations"]), str(s["simulations"])], problem
