@@ -8,7 +8,8 @@ set -euo pipefail
 # the same number of simulations, so each lane takes one study of each problem: both take about as long.
 # The optimiser comparison, the headline, comes first in both.
 # Each command resumes from OUT/runs.sqlite, so this script can be killed and started again at any time;
-# it takes days on two cores (docs/performance.md). Usage: experiments/full_studies.sh [OUT] [WORKERS]
+# it takes about eight hours on two cores (docs/performance.md, 'The full studies').
+# Usage: experiments/full_studies.sh [OUT] [WORKERS]
 OUT="${1:-results}"
 WORKERS="${2:-2}"
 mkdir -p "$OUT"
