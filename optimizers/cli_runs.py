@@ -50,11 +50,8 @@ def list_runs(args: argparse.Namespace) -> int:
     try:
         if not Path(args.store).is_file():
             raise UsageError(f"--store {args.store}: no such file (a run store is made by catenary optimize)")
-        store = RunStore(args.store, read_only=True)
-        try:
+        with RunStore(args.store, read_only=True) as store:
             runs = store.run_progress()
-        finally:
-            store.close()
     except (UsageError, StoreError) as error:
         if getattr(args, "debug", False):
             raise
