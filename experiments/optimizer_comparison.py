@@ -191,9 +191,10 @@ def _evaluation_rows(store: RunStore, result: OptimizationResult, problem: str) 
     simulation = 0
     for record in result.history:
         simulation += int(record.charged)
-        if record.cached and record.charged:  # simulated by another run: its own time
+        if record.cached and record.charged:  # simulated by another run (or step): its own time
             key = space.design_key(record.x)
-            found = store.lookup(space.store_key, key, record.speed_kmh, result.fidelity)
+            source = "env" if result.optimizer == "ppo" else "simulation"
+            found = store.lookup(space.store_key, key, record.speed_kmh, result.fidelity, source)
             simulation_time = found.wall_time if found is not None else 0.0
         else:
             simulation_time = record.wall_time

@@ -18,7 +18,9 @@ Every step is a simulation and is charged: ``total_timesteps`` is the budget, an
 exactly ``budget`` steps. A wrapper logs each step into the run's history and its store, so an
 interrupted training run resumes like the other optimisers: the stored steps are replayed (the env is
 reset but not stepped, the stored reward is returned) and PPO, seeded, takes the same actions again.
-The env owns its simulations and reward convention, so RL runs neither use nor feed the design cache.
+The env owns its simulations and reward convention, so RL runs neither use nor feed the other optimisers'
+design cache; among themselves they share it: a step another RL run made on the same env (the same
+:class:`EnvSpec`), the same design at the same speed, is served from the store (charged, not simulated).
 
 A trained policy is saved by :func:`save_policy` as one file: stable-baselines3's zip archive with, inside
 it, ``catenary_env_policy.json`` (the problem, its model fingerprint, the env with its speed or speed
@@ -208,10 +210,11 @@ def _recording_wrapper_class() -> type:
     class RecordingWrapper(gymnasium.Wrapper):
         """Log every step into the run (history, store); replay the steps a resumed run has stored."""
 
-        def __init__(self, env: Any, recorder: RunRecorder, space: GridSpace) -> None:
+        def __init__(self, env: Any, recorder: RunRecorder, space: GridSpace, env_key: str) -> None:
             super().__init__(env)
             self.recorder = recorder
             self.space = space
+            self.env_key = env_key
             self._observation: Any = None
             self._speed = recorder.config.speed_kmh
 
@@ -230,6 +233,20 @@ def _recording_wrapper_class() -> type:
                 self.recorder.append(stored.record)
                 info = {"feasible": stored.record.feasible, "reason": stored.record.reason, "replayed": True}
                 reward = float(stored.reward if stored.reward is not None else -stored.record.loss)
+                return self._observation, reward, True, False, info
+            config = self.recorder.config
+            hit = self.recorder.store.lookup_env(
+                config.problem, key, self._speed, config.fidelity, self.env_key
+            )
+            if hit is not None:  # an RL run on this env made this step: the same reward, not simulated again
+                outcome, reward = hit
+                record = EvaluationRecord(
+                    index, tuple(float(v) for v in x), outcome.feasible, outcome.sigma, outcome.reason,
+                    0.0, True, True, float(self._speed),
+                )  # fmt: skip
+                self.recorder.persist(record, key, reward=reward)
+                self.recorder.append(record)
+                info = {"feasible": outcome.feasible, "reason": outcome.reason, "cached": True}
                 return self._observation, reward, True, False, info
             start = time.perf_counter()
             observation, env_reward, terminated, truncated, info = self.env.step(action)
@@ -357,7 +374,8 @@ def _vector_env(env_spec: EnvSpec, recorder: RunRecorder, space: GridSpace, sett
     from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
     wrapper = _recording_wrapper_class()
-    vec_env = DummyVecEnv([lambda: wrapper(env_spec.make(), recorder, space)])
+    env_key = json.dumps(dataclasses.asdict(env_spec), sort_keys=True)
+    vec_env = DummyVecEnv([lambda: wrapper(env_spec.make(), recorder, space, env_key)])
     if not (settings.normalize_observation or settings.normalize_reward):
         return vec_env
     # gamma = 0: an episode is one step, its return is its reward.

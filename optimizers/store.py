@@ -5,7 +5,8 @@ flight (the file is in WAL mode; a commit survives the death of the process that
 rows are the cache: an evaluation is identified by (problem, design on its grid, speed, fidelity), the
 design by the integers ``round(x / step)``, and a design evaluated once in a store is not simulated
 again by any run in it. Runs made by the RL trainer (whose simulations belong to a Gymnasium env and
-its reward convention) are stored with ``source = 'env'`` and are not served as cache.
+its reward convention) are stored with ``source = 'env'`` and are not served to the other optimisers;
+they are served to RL runs on the same env (:meth:`RunStore.lookup_env`).
 
 A run is identified by its configuration (:class:`RunConfig`); resuming a run replays its stored
 evaluations one by one in place of simulating them (see :func:`optimizers.runner.optimize`).
@@ -357,17 +358,43 @@ class RunStore:
         return stored
 
     def lookup(
-        self, problem: str, design_key: tuple[int, ...], speed_kmh: float, fidelity: str
+        self,
+        problem: str,
+        design_key: tuple[int, ...],
+        speed_kmh: float,
+        fidelity: str,
+        source: str = "simulation",
     ) -> Outcome | None:
-        """The cached outcome of a design (any run of this store), or None if never simulated here."""
+        """The cached outcome of a design (any run of this store), or None if never simulated here;
+        ``source="env"``: as an RL run's env step of any env (for its simulation's time, not its reward)."""
         row = self._connection.execute(
             "SELECT feasible, sigma, reason, wall_time FROM evaluations WHERE problem = ? AND design_key = ? "
-            "AND speed_kmh = ? AND fidelity = ? AND source = 'simulation' ORDER BY cached LIMIT 1",
-            (problem, _key_text(design_key), float(speed_kmh), fidelity),
+            "AND speed_kmh = ? AND fidelity = ? AND source = ? ORDER BY cached LIMIT 1",
+            (problem, _key_text(design_key), float(speed_kmh), fidelity, source),
         ).fetchone()
         if row is None:
             return None
         return Outcome(bool(row[0]), None if row[1] is None else float(row[1]), str(row[2]), float(row[3]))
+
+    def lookup_env(
+        self, problem: str, design_key: tuple[int, ...], speed_kmh: float, fidelity: str, env: str
+    ) -> tuple[Outcome, float] | None:
+        """The outcome and reward of an env step an RL run made on the same env, or None.
+
+        ``env`` is the env's settings as canonical JSON (sorted keys), as the run's options hold them under
+        ``"env"``: the same env gives the same reward for the same design at the same speed.
+        """
+        row = self._connection.execute(
+            "SELECT e.feasible, e.sigma, e.reason, e.wall_time, e.reward FROM evaluations AS e "
+            "JOIN runs AS r ON r.run_id = e.run_id WHERE e.problem = ? AND e.design_key = ? "
+            "AND e.speed_kmh = ? AND e.fidelity = ? AND e.source = 'env' AND e.cached = 0 "
+            "AND e.reward IS NOT NULL AND json_extract(r.options, '$.env') = json(?) LIMIT 1",
+            (problem, _key_text(design_key), float(speed_kmh), fidelity, env),
+        ).fetchone()
+        if row is None:
+            return None
+        sigma = None if row[1] is None else float(row[1])
+        return Outcome(bool(row[0]), sigma, str(row[2]), float(row[3])), float(row[4])
 
     def count_evaluations(self, run_id: int | None = None) -> int:
         """Evaluations stored (of one run, or of all)."""

@@ -92,7 +92,11 @@ def test_ppo_spends_exactly_the_budget_and_is_reproducible(budget):
     _, first = train_design_policy(SINGLE_SPEED, PROBLEM, budget=budget, seed=1, options=SMALL)
     _, second = train_design_policy(SINGLE_SPEED, PROBLEM, budget=budget, seed=1, options=SMALL)
     assert len(first.history) == first.n_simulations == budget
-    assert all(record.charged and not record.cached for record in first.history)
+    assert all(record.charged for record in first.history)  # every step is charged
+    seen = set()
+    for record in first.history:  # a design met before in the run is served from the store, not simulated
+        assert record.cached == (record.x in seen)
+        seen.add(record.x)
     assert _comparable(first.history) == _comparable(second.history)
     for record in first.history:
         assert np.array_equal(SPACE.snap(record.x), np.array(record.x))
@@ -146,6 +150,25 @@ def test_ppo_replays_whatever_the_callers_torch_threads(tmp_path, monkeypatch):
         torch.set_num_threads(caller)
     assert threads == [1, 1]
     assert _comparable(resumed.history) == _comparable(full.history)
+
+
+def test_ppo_runs_on_the_same_env_share_their_steps(tmp_path):
+    """A longer run with the same seed repeats a shorter one's steps: they come from the store, with the
+    same rewards, so the run is the one it would be alone. Another env (a speed range) shares nothing."""
+    store = tmp_path / "runs.sqlite"
+    _, short = train_design_policy(SINGLE_SPEED, PROBLEM, budget=100, seed=4, options=SMALL, store=store)
+    _, long = train_design_policy(SINGLE_SPEED, PROBLEM, budget=160, seed=4, options=SMALL, store=store)
+    _, alone = train_design_policy(SINGLE_SPEED, PROBLEM, budget=160, seed=4, options=SMALL)
+    assert [r.x for r in long.history] == [r.x for r in alone.history]
+    assert [r.sigma for r in long.history] == [r.sigma for r in alone.history]
+    assert all(r.cached for r in long.history[:100])
+    first_met = {r.x for r in short.history}
+    assert [r.cached for r in long.history[100:]] == [
+        r.cached or r.x in first_met for r in alone.history[100:]
+    ]
+    _, ranged = train_design_policy(SPEED_RANGE, PROBLEM, budget=64, seed=4, options=SMALL, store=store)
+    _, ranged_alone = train_design_policy(SPEED_RANGE, PROBLEM, budget=64, seed=4, options=SMALL)
+    assert [r.cached for r in ranged.history] == [r.cached for r in ranged_alone.history]
 
 
 @pytest.mark.slow  # 50 s of PPO training; the budget and resume tests above keep PPO in every run
