@@ -208,7 +208,8 @@ def _recording_wrapper_class() -> type:
     import gymnasium
 
     class RecordingWrapper(gymnasium.Wrapper):
-        """Log every step into the run (history, store); replay the steps a resumed run has stored."""
+        """Log every step into the run (history, store); replay the steps a resumed run has stored, and
+        serve from the store a step an RL run on the same env (``env_key``: its EnvSpec as JSON) made."""
 
         def __init__(self, env: Any, recorder: RunRecorder, space: GridSpace, env_key: str) -> None:
             super().__init__(env)
@@ -235,14 +236,18 @@ def _recording_wrapper_class() -> type:
                 reward = float(stored.reward if stored.reward is not None else -stored.record.loss)
                 return self._observation, reward, True, False, info
             config = self.recorder.config
-            hit = self.recorder.store.lookup_env(
-                config.problem, key, self._speed, config.fidelity, self.env_key
+            hit = (
+                None  # the env breaks its contract (no speed): env.step below and _record say so
+                if self._speed is None
+                else self.recorder.store.lookup_env(
+                    config.problem, key, self._speed, config.fidelity, self.env_key
+                )
             )
             if hit is not None:  # an RL run on this env made this step: the same reward, not simulated again
                 outcome, reward = hit
                 record = EvaluationRecord(
                     index, tuple(float(v) for v in x), outcome.feasible, outcome.sigma, outcome.reason,
-                    0.0, True, True, float(self._speed),
+                    0.0, True, True, self._speed,
                 )  # fmt: skip
                 self.recorder.persist(record, key, reward=reward)
                 self.recorder.append(record)

@@ -193,3 +193,25 @@ def test_speed_conditioned_policy_learns_the_design_per_speed():
 def test_env_spec_refuses_nothing_silently():
     with pytest.raises(ValueError, match="budget"):
         train_design_policy(SINGLE_SPEED, PROBLEM, budget=0, seed=0)
+
+
+class _SpeedlessEnv(SpeedQuadraticDesignEnv):
+    """Breaks the env contract: with a speed range, its info does not say the episode's speed."""
+
+    def reset(self, *, seed=None, options=None):
+        observation, _ = super().reset(seed=seed, options=options)
+        return observation, {}
+
+    def step(self, action):
+        observation, reward, terminated, truncated, info = super().step(action)
+        del info["speed_kmh"]
+        return observation, reward, terminated, truncated, info
+
+
+def test_a_speed_range_env_that_does_not_report_its_speed_is_refused(tmp_path):
+    env_id = "TestSpeedlessDesign-v0"
+    if env_id not in gymnasium.registry:
+        gymnasium.register(id=env_id, entry_point=_SpeedlessEnv)
+    spec = EnvSpec(env_id, speed_kmh=None, speed_range=(200.0, 300.0), fidelity="test")
+    with pytest.raises(ValueError, match="the env reports no speed"):
+        train_design_policy(spec, PROBLEM, budget=8, seed=0, options=SMALL, store=tmp_path / "runs.sqlite")
