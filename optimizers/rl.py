@@ -236,13 +236,11 @@ def _recording_wrapper_class() -> type:
                 reward = float(stored.reward if stored.reward is not None else -stored.record.loss)
                 return self._observation, reward, True, False, info
             config = self.recorder.config
-            hit = (
-                None  # the env breaks its contract (no speed): env.step below and _record say so
-                if self._speed is None
-                else self.recorder.store.lookup_env(
+            hit = None  # an env that reports no speed breaks its contract: env.step and _record say so
+            if self._speed is not None:
+                hit = self.recorder.store.lookup_env(
                     config.problem, key, self._speed, config.fidelity, self.env_key
                 )
-            )
             if hit is not None:  # an RL run on this env made this step: the same reward, not simulated again
                 outcome, reward = hit
                 record = EvaluationRecord(
