@@ -85,6 +85,10 @@ class Config:
         The run store; default ``out/runs.sqlite``, shared by the studies.
     problems : tuple of str
         The design problems compared.
+    optimizers : tuple of str
+        The optimisers run (default all of :data:`OPTIMIZERS`). Two processes given disjoint sets share
+        the work of one problem on two cores; the combined results come from one more run over all of
+        them, which replays every run from the store.
     """
 
     full: bool = False
@@ -92,6 +96,7 @@ class Config:
     workers: int = 1
     store: Path | None = None
     problems: tuple[str, ...] = PROBLEMS
+    optimizers: tuple[str, ...] = OPTIMIZERS
 
     @property
     def fidelity(self) -> str:
@@ -134,7 +139,7 @@ def main(config: Config) -> Path:
                     "sigma_N": outcome.sigma,
                 }
             )
-            for optimizer in OPTIMIZERS:
+            for optimizer in config.optimizers:
                 for seed in config.seeds:
                     result, note = _run(store, config, optimizer, problem, seed)
                     if result is None:
@@ -440,6 +445,10 @@ def cli(argv: list[str] | None = None) -> int:
         "--problems", nargs="+", default=list(PROBLEMS), choices=list(DESIGN_PROBLEMS),
         help=f"default: {' '.join(PROBLEMS)}",
     )  # fmt: skip
+    parser.add_argument(
+        "--optimizers", nargs="+", default=list(OPTIMIZERS), choices=list(OPTIMIZERS),
+        help="default: all; disjoint sets in two processes share a problem's runs",
+    )  # fmt: skip
     parser.add_argument("--workers", type=int, default=1, help="worker processes per batch (default 1)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
     parser.add_argument(
@@ -447,8 +456,9 @@ def cli(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     config = Config(
-        full=args.full, out=args.out, workers=args.workers, store=args.store, problems=tuple(args.problems)
-    )
+        full=args.full, out=args.out, workers=args.workers, store=args.store,
+        problems=tuple(args.problems), optimizers=tuple(args.optimizers),
+    )  # fmt: skip
     print(report(main(config)))
     return 0
 

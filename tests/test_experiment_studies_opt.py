@@ -179,14 +179,28 @@ def test_a_lane_of_the_full_studies_names_its_problems():
         optimizer_comparison.cli(["--problems", "X9"])
 
 
+def test_the_comparison_runs_the_optimisers_it_is_given(tmp_path):
+    """``--optimizers``: two processes with disjoint sets share a problem's runs (full_studies.sh)."""
+    folder = optimizer_comparison.main(
+        optimizer_comparison.Config(out=tmp_path, problems=("B1",), optimizers=("random",))
+    )
+    runs = read_csv(folder / "runs.csv")
+    assert {(r["optimizer"], r["problem"], r["status"]) for r in runs} == {("random", "B1", "done")}
+    assert [r["seed"] for r in runs] == [0, 1]
+    with pytest.raises(SystemExit):
+        optimizer_comparison.cli(["--optimizers", "nelder-mead"])
+
+
 def _run_full_studies(tmp_path: Path, fail: str = "") -> tuple[subprocess.CompletedProcess, list[str]]:
     """experiments/full_studies.sh with a stand-in ``python`` that logs its arguments (and fails on
-    those containing ``fail``): the commands it runs, each study's in the order it runs them."""
+    those containing ``fail``): the commands it runs, each study's in the order it runs them. The
+    stand-in also logs each command with its parent's process id to ``lanes.txt``: one id per lane."""
     bin_dir, log = tmp_path / "bin", tmp_path / "calls.txt"
     bin_dir.mkdir()
     stub = bin_dir / "python"
     failing = f'case "$*" in *"{fail}"*) exit 3;; esac\n' if fail else ""
-    stub.write_text(f'#!/bin/sh\necho "$*" >> {log}\n{failing}')
+    lanes = f'echo "$PPID $*" >> {tmp_path / "lanes.txt"}\n'
+    stub.write_text(f'#!/bin/sh\necho "$*" >> {log}\n{lanes}{failing}')
     stub.chmod(0o755)
     script = Path(__file__).parents[1] / "experiments" / "full_studies.sh"
     run = subprocess.run(
@@ -205,13 +219,26 @@ def test_the_full_studies_script_runs_every_study_in_its_order(tmp_path):
         f"-m experiments.design_studies --full --problems B1 SW1 --workers 2 {out}",
         f"-m experiments.design_studies --full --problems B2 SW2 B3 SW3 --workers 2 {out}",
     ]
-    lane = [c.split()[1] + " " + c.split()[4] for c in calls[2:6]]  # two lanes, interleaved
-    assert sorted(lane) == [
-        f"experiments.{s} {p}" for s in ("optimizer_comparison", "rl_studies") for p in ("B1", "SW1")
-    ]
-    assert lane.index("experiments.optimizer_comparison B1") < lane.index("experiments.rl_studies SW1")
-    assert lane.index("experiments.optimizer_comparison SW1") < lane.index("experiments.rl_studies B1")
-    assert calls[6:] == [
+    compared = []  # (problem, optimiser) of every comparison command
+    for call in (c.split() for c in calls[2:7] if "optimizer_comparison" in c):
+        named = (
+            call[call.index("--optimizers") + 1 : call.index("--workers")] if "--optimizers" in call else None
+        )
+        compared += [
+            (call[call.index("--problems") + 1], o) for o in named or optimizer_comparison.OPTIMIZERS
+        ]
+    assert sorted(compared) == sorted(
+        (p, o) for p in ("B1", "SW1") for o in optimizer_comparison.OPTIMIZERS
+    )  # each run once
+    lanes: dict[str, list[str]] = {}  # the lanes' commands by the lane's process id, in order
+    for line in (tmp_path / "lanes.txt").read_text().splitlines()[2:7]:
+        pid, command = line.split(" ", 1)
+        lanes.setdefault(pid, []).append(command.split()[1])
+    assert len(lanes) == 2
+    for studies in lanes.values():  # each lane: its share of the comparison, the headline, then RL
+        assert studies[-1] == "experiments.rl_studies"
+        assert set(studies[:-1]) == {"experiments.optimizer_comparison"}
+    assert calls[7:] == [
         f"-m experiments.optimizer_comparison --full --workers 2 {out}",
         f"-m experiments.rl_studies --full --workers 2 {out}",
         f"-m catenary_env.cli report --out {tmp_path / 'out'}",
@@ -222,8 +249,8 @@ def test_the_full_studies_script_stops_when_a_lane_fails(tmp_path):
     run, calls = _run_full_studies(tmp_path, fail="experiments.optimizer_comparison --full --problems B1")
     assert run.returncode == 1
     assert run.stderr.strip().startswith("a lane failed")
-    assert not any("rl_studies --full --problems SW1" in c for c in calls)  # the rest of its lane
-    assert any("rl_studies --full --problems B1" in c for c in calls)  # the other lane ran
+    assert not any("rl_studies --full --problems B1" in c for c in calls)  # the rest of its lane
+    assert any("rl_studies --full --problems SW1" in c for c in calls)  # the other lane ran
     assert len(calls) == 5  # and nothing after the lanes
 
 
