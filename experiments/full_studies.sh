@@ -23,12 +23,12 @@ study() {  # study NAME ARGS...: one study in full on one core
 }
 {
     study optimizer_comparison --problems B1
-    study optimizer_comparison --problems SW1 --optimizers ppo ngopt
+    study optimizer_comparison --problems SW1 --optimizers ppo
     study rl_studies --problems B1
 } > "$OUT/lane-1.log" 2>&1 &
 one=$!
 {
-    study optimizer_comparison --problems SW1 --optimizers ga cma de pso random
+    study optimizer_comparison --problems SW1 --optimizers ga cma de pso random ngopt
     study rl_studies --problems SW1
 } > "$OUT/lane-2.log" 2>&1 &
 two=$!
