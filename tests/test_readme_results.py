@@ -33,3 +33,11 @@ def test_the_readme_headline_table_is_the_committed_design_results():
         confirmed = f"{ref_exact:.2f} → {opt_exact:.2f} ({_reduction(ref_exact, opt_exact):.1f} %)"
         assert cells[3] == confirmed, problem
         assert cells[4:] == [str(s["generations"]), str(s["simulations"])], problem
+
+
+def test_the_readme_optimiser_table_is_the_committed_comparison():
+    """The README's final-σ table is the one the comparison wrote from its committed data."""
+    written = (ROOT / "results" / "optimizers" / "optimizers.md").read_text(encoding="utf-8")
+    table = written.split("\n\n")[0]
+    assert table.startswith("| problem | optimiser | final σ (N): median [IQR] |")
+    assert table in (ROOT / "README.md").read_text(encoding="utf-8")
