@@ -9,7 +9,7 @@ set -euo pipefail
 # optimiser: each lane finishes its share of the comparison, the headline, at about the same time, then
 # runs the RL studies of one problem.
 # Each command resumes from OUT/runs.sqlite, so this script can be killed and started again at any time;
-# it takes about eight hours on two cores (docs/performance.md, 'The full studies').
+# it takes about ten hours on two cores (docs/performance.md, 'The full studies').
 # Usage: experiments/full_studies.sh [OUT] [WORKERS]
 OUT="${1:-results}"
 WORKERS="${2:-2}"

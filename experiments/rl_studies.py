@@ -259,7 +259,8 @@ def _learning_curves(store: RunStore, config: Config, problem: str, rows: list[d
     for seed in config.seeds:
         _, result = train_policy(store, problem, config.learning_budget, seed, config.ppo, config.fidelity)
         rows.extend(_step_rows(store, "learning", problem, result, config.ppo))
-        print(f"ppo on {problem} seed {seed}: best σ {result.best_sigma} N", file=sys.stderr, flush=True)
+        best = "no feasible design" if result.best_sigma is None else f"best σ {result.best_sigma:.3f} N"
+        print(f"ppo on {problem} seed {seed}: {best}", file=sys.stderr, flush=True)
 
 
 def _ga_optima(
