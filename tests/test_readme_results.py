@@ -6,6 +6,8 @@ import csv
 import json
 from pathlib import Path
 
+from experiments.optimizer_comparison import OPTIMIZERS
+
 ROOT = Path(__file__).resolve().parents[1]
 DESIGN = ROOT / "results" / "design"
 
@@ -48,9 +50,8 @@ def test_the_committed_comparison_is_the_full_one_on_b1_and_sw1():
     """Study 4 as docs/problems.md sets it: seven optimisers, five seeds, 300 simulations a run."""
     with (ROOT / "results" / "optimizers" / "runs.csv").open(encoding="utf-8", newline="") as f:
         runs = list(csv.DictReader(f))
-    optimizers = ("ga", "cma", "de", "pso", "random", "ngopt", "ppo")
     for problem in ("B1", "SW1"):
-        for optimizer in optimizers:
+        for optimizer in OPTIMIZERS:
             chosen = [r for r in runs if r["problem"] == problem and r["optimizer"] == optimizer]
             assert sorted(int(r["seed"]) for r in chosen) == [0, 1, 2, 3, 4], (problem, optimizer)
             assert {(r["status"], r["fidelity"], r["budget"]) for r in chosen} == {("done", "study", "300")}
