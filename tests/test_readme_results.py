@@ -55,3 +55,40 @@ def test_the_committed_comparison_is_the_full_one_on_b1_and_sw1():
             chosen = [r for r in runs if r["problem"] == problem and r["optimizer"] == optimizer]
             assert sorted(int(r["seed"]) for r in chosen) == [0, 1, 2, 3, 4], (problem, optimizer)
             assert {(r["status"], r["fidelity"], r["budget"]) for r in chosen} == {("done", "study", "300")}
+
+
+def _rl_tables() -> dict[str, str]:
+    """The tables of ``results/rl/rl.md`` by their section title."""
+    written = (ROOT / "results" / "rl" / "rl.md").read_text(encoding="utf-8")
+    sections = [s.split("\n\n", 1) for s in written.split("### ")[1:]]
+    return {title: table.strip() for title, table in sections}
+
+
+def test_the_readme_rl_tables_are_the_committed_rl_study():
+    tables = _rl_tables()
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    for title in ("Speed-conditioned policy against GA optima", "One design for 200–320 km/h"):
+        assert tables[title] in readme, title
+
+
+def test_the_committed_rl_study_is_the_full_one_on_b1_and_sw1():
+    """Study 5 as docs/problems.md sets it: 3 seeds × 1000 steps of PPO at 300 km/h, a speed-conditioned
+    policy of 2000 steps, GA runs of 1000 simulations at 200, 260, 300 and 320 km/h, a mean-σ GA of 300
+    evaluations."""
+    rl = ROOT / "results" / "rl"
+    with (rl / "steps.csv").open(encoding="utf-8", newline="") as f:
+        steps = list(csv.DictReader(f))
+    with (rl / "ga_runs.csv").open(encoding="utf-8", newline="") as f:
+        ga = list(csv.DictReader(f))
+    for problem in ("B1", "SW1"):
+        learning = [s for s in steps if s["problem"] == problem and s["part"] == "learning"]
+        for seed in ("0", "1", "2"):
+            assert sum(s["seed"] == seed for s in learning) == 1000, (problem, seed)
+        assert {float(s["speed_kmh"]) for s in learning} == {300.0}
+        policy = [s for s in steps if s["problem"] == problem and s["part"] == "speed_policy"]
+        assert len(policy) == 2000 and 200.0 <= min(float(s["speed_kmh"]) for s in policy)
+        assert max(float(s["speed_kmh"]) for s in policy) <= 320.0
+        runs = {r["objective"]: r for r in ga if r["problem"] == problem}
+        for speed in (200, 260, 300, 320):
+            assert runs[f"sigma at {speed} km/h"]["n_simulations"] == "1000", (problem, speed)
+        assert runs["mean sigma over 7 speeds, 200-320 km/h"]["budget"] == "300", problem
