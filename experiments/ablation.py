@@ -31,7 +31,7 @@ from catenary_env.model.presets import load_catenary, load_pantograph
 from catenary_env.pipeline import FIDELITIES, Fidelity, calibrate_uplift, en50367_mean_force, simulate
 from catenary_env.validation import validate
 
-from .common import DEFAULT_OUT, read_csv, run_cli, study_dir, write_csv, write_json
+from .common import DEFAULT_OUT, read_csv, run_cli, study_dir, worker_count, write_csv, write_json
 
 NAME = "ablation"
 EN_SPEEDS = (250.0, 300.0)  # km/h
@@ -286,7 +286,7 @@ def _figure(rows: list[dict], path: Path) -> None:
 def cli(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--full", action="store_true", help="the validation's own setting (hours)")
-    parser.add_argument("--workers", type=int, default=1, help="worker processes (default 1)")
+    parser.add_argument("--workers", type=worker_count, default=1, help="worker processes (default 1)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
     args = parser.parse_args(argv)
     print(report(main(Config(full=args.full, out=args.out, workers=args.workers))))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import csv
 import json
 import sys
@@ -16,6 +17,18 @@ STORE = "runs.sqlite"
 """The run store the studies share, in their output folder: one store lets a study reuse what another has
 simulated (the same design at the same speed and fidelity is simulated once, optimizers/store.py), e.g. the
 GA runs of the optimiser comparison and the design studies that start from the same seed."""
+
+
+def worker_count(text: str) -> int:
+    """``--workers`` of the studies' command lines: a whole number of processes, at least 1 (refused before
+    anything is simulated)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of processes") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{value}: must be at least 1 process")
+    return value
 
 
 def study_dir(out: Path, name: str) -> Path:

@@ -43,7 +43,7 @@ from catenary_env.problems.design_problem import DesignProblem, resolve_fidelity
 from optimizers.ga import POPULATION_SIZES, GAOptions
 from optimizers.runner import optimize
 
-from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, run_cli, study_dir, write_csv
+from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, run_cli, study_dir, worker_count, write_csv
 
 NAME = "design"
 PROBLEMS = ("B1", "B2", "B3", "SW1", "SW2", "SW3")
@@ -630,7 +630,7 @@ def cli(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--problems", nargs="+", default=list(PROBLEMS), choices=PROBLEMS, help="default: all six"
     )
-    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    parser.add_argument("--workers", type=worker_count, default=2, help="worker processes (default 2)")
     parser.add_argument("--seed", type=int, default=0, help="the GA's seed (default 0)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
     args = parser.parse_args(argv)

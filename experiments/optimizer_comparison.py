@@ -56,7 +56,7 @@ from optimizers.problem import GridSpace
 from optimizers.runner import optimize
 from optimizers.store import RunStore
 
-from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, run_cli, study_dir, write_csv
+from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, run_cli, study_dir, worker_count, write_csv
 from .design_evaluations import evaluate_designs
 from .iohprofiler import runs_from_rows, write_algorithm
 from .rl_studies import policy_options, train_policy
@@ -449,7 +449,9 @@ def cli(argv: list[str] | None = None) -> int:
         "--optimizers", nargs="+", default=list(OPTIMIZERS), choices=list(OPTIMIZERS),
         help="default: all; disjoint sets in two processes share a problem's runs",
     )  # fmt: skip
-    parser.add_argument("--workers", type=int, default=1, help="worker processes per batch (default 1)")
+    parser.add_argument(
+        "--workers", type=worker_count, default=1, help="worker processes per batch (default 1)"
+    )
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
     parser.add_argument(
         "--store", type=Path, default=None, help="run store (default: OUT/runs.sqlite, shared by the studies)"

@@ -20,7 +20,7 @@ import numpy as np
 
 from catenary_env.problems import evaluate_problem, get_problem
 
-from .common import DEFAULT_OUT, markdown_table, read_csv, run_cli, study_dir, write_csv
+from .common import DEFAULT_OUT, markdown_table, read_csv, run_cli, study_dir, worker_count, write_csv
 
 NAME = "presag"
 PROBLEMS = ("BPresag", "SWPresag")
@@ -176,7 +176,7 @@ def cli(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--full", action="store_true", help="20 spans on the 1 cm grid (hours) instead of quick"
     )
-    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    parser.add_argument("--workers", type=worker_count, default=2, help="worker processes (default 2)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
     args = parser.parse_args(argv)
     print(report(main(Config(full=args.full, out=args.out, workers=args.workers))))

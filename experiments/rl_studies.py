@@ -61,7 +61,7 @@ from optimizers.rl import DesignPolicy, EnvSpec, PPOOptions, design_for_speed, t
 from optimizers.runner import optimize
 from optimizers.store import RunStore
 
-from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, run_cli, study_dir, write_csv
+from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, run_cli, study_dir, worker_count, write_csv
 from .design_evaluations import evaluate_designs, mean_sigma_problem
 
 NAME = "rl"
@@ -580,7 +580,9 @@ def cli(argv: list[str] | None = None) -> int:
         "--problems", nargs="+", default=[], choices=list(POPULATION_SIZES),
         help="default: B1 SW1 (quick: B1)",
     )  # fmt: skip
-    parser.add_argument("--workers", type=int, default=1, help="worker processes for the GA (default 1)")
+    parser.add_argument(
+        "--workers", type=worker_count, default=1, help="worker processes for the GA (default 1)"
+    )
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
     parser.add_argument(
         "--store", type=Path, default=None, help="run store (default: OUT/runs.sqlite, shared by the studies)"

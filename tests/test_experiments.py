@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import importlib
+
 import pytest
 
 pytest.importorskip("matplotlib", reason="the studies' figures need matplotlib")
@@ -72,3 +74,16 @@ def test_presag_report_finds_the_best_feasible_presag(tmp_path):
     write_csv(tmp_path / "presag.csv", rows)
     table = presag.report(tmp_path)
     assert "| BPresag | 300 | 0.02 | 35.00 | 40.00 | 12.5 |" in table
+
+
+@pytest.mark.parametrize(
+    "module", ["ablation", "design_studies", "optimizer_comparison", "presag", "rl_studies"]
+)
+@pytest.mark.parametrize("workers", ["0", "-2", "two"])
+def test_a_study_refuses_a_worker_count_before_simulating(module, workers, capsys, monkeypatch):
+    study = importlib.import_module(f"experiments.{module}")
+    monkeypatch.setattr(study, "main", lambda config: pytest.fail("simulated with a bad --workers"))
+    with pytest.raises(SystemExit) as exit_:
+        study.cli(["--workers", workers])
+    assert exit_.value.code == 2
+    assert "--workers" in capsys.readouterr().err
