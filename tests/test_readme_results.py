@@ -12,6 +12,12 @@ ROOT = Path(__file__).resolve().parents[1]
 DESIGN = ROOT / "results" / "design"
 
 
+def _rows(path: Path) -> list[dict[str, str]]:
+    """A committed CSV file's rows, as text."""
+    with path.open(encoding="utf-8", newline="") as f:
+        return list(csv.DictReader(f))
+
+
 def _headline_rows() -> dict[str, list[str]]:
     """README rows ``| problem | σ ref | σ opt | reduction | confirmed | generations | simulations |``."""
     text = (ROOT / "README.md").read_text(encoding="utf-8")
@@ -48,8 +54,7 @@ def test_the_readme_optimiser_table_is_the_committed_comparison():
 
 def test_the_committed_comparison_is_the_full_one_on_b1_and_sw1():
     """Study 4 as docs/problems.md sets it: seven optimisers, five seeds, 300 simulations a run."""
-    with (ROOT / "results" / "optimizers" / "runs.csv").open(encoding="utf-8", newline="") as f:
-        runs = list(csv.DictReader(f))
+    runs = _rows(ROOT / "results" / "optimizers" / "runs.csv")
     for problem in ("B1", "SW1"):
         for optimizer in OPTIMIZERS:
             chosen = [r for r in runs if r["problem"] == problem and r["optimizer"] == optimizer]
@@ -76,10 +81,7 @@ def test_the_committed_rl_study_is_the_full_one_on_b1_and_sw1():
     policy of 2000 steps, GA runs of 1000 simulations at 200, 260, 300 and 320 km/h, a mean-σ GA of 300
     evaluations."""
     rl = ROOT / "results" / "rl"
-    with (rl / "steps.csv").open(encoding="utf-8", newline="") as f:
-        steps = list(csv.DictReader(f))
-    with (rl / "ga_runs.csv").open(encoding="utf-8", newline="") as f:
-        ga = list(csv.DictReader(f))
+    steps, ga = _rows(rl / "steps.csv"), _rows(rl / "ga_runs.csv")
     for problem in ("B1", "SW1"):
         learning = [s for s in steps if s["problem"] == problem and s["part"] == "learning"]
         for seed in ("0", "1", "2"):
