@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .analysis.statistics import ContactStatistics, filtered_contact_force, passage_statistics
+from .blas_threads import single_threaded
 from .dynamics.linear_system import LinearSystem, linearise
 from .dynamics.newmark import Trajectory
 from .dynamics.oracle import simulate_passage_reference
@@ -333,6 +334,7 @@ def prepare_dynamics(
     return prepare_reduced_passage(reduced, fidelity.time_step, fidelity.near_spans)
 
 
+@single_threaded
 def simulate(
     catenary: CatenaryDefinition,
     pantograph: PantographDefinition,
@@ -383,6 +385,7 @@ def evaluate(
     return evaluate_unchecked(catenary, pantograph, design, speed, fidelity, force)
 
 
+@single_threaded
 def evaluate_unchecked(
     catenary: CatenaryDefinition,
     pantograph: PantographDefinition,
@@ -437,6 +440,7 @@ def _central_span(static: StaticSolution, design: Design) -> tuple[tuple[float, 
     )
 
 
+@single_threaded
 def calibrate_uplift(
     catenary: CatenaryDefinition,
     pantograph: PantographDefinition,

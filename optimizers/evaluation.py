@@ -38,6 +38,8 @@ from collections.abc import Iterator, Sequence
 from types import TracebackType
 from typing import Any, Protocol
 
+from catenary_env.blas_threads import limit_process
+
 from .problem import Outcome, SimulateFunction
 
 __all__ = [
@@ -47,6 +49,7 @@ __all__ = [
     "ProcessPoolBackend",
     "SimulationArguments",
     "die_with_parent",
+    "start_worker",
     "make_backend",
 ]
 
@@ -132,6 +135,14 @@ def die_with_parent(parent_pid: int) -> None:
     threading.Thread(target=_exit_when_orphaned, args=(parent_pid,), daemon=True).start()
 
 
+def start_worker(parent_pid: int) -> None:
+    """The initializer of the local workers: one BLAS thread (docs/performance.md, 'Threads': two workers
+    on two cores with numpy's default of a thread per core take twice as long a design) and
+    :func:`die_with_parent`."""
+    limit_process()
+    die_with_parent(parent_pid)
+
+
 def _exit_when_orphaned(parent_pid: int) -> None:
     while os.getppid() == parent_pid:
         time.sleep(PARENT_POLL_INTERVAL)
@@ -154,7 +165,7 @@ class ProcessPoolBackend(_Closing):
         self.description = f"{n_workers} local processes"
         context = multiprocessing.get_context("spawn")
         self._pool = concurrent.futures.ProcessPoolExecutor(
-            max_workers=n_workers, mp_context=context, initializer=die_with_parent, initargs=(os.getpid(),)
+            max_workers=n_workers, mp_context=context, initializer=start_worker, initargs=(os.getpid(),)
         )
 
     def run(

@@ -28,7 +28,7 @@ LAYERS = (
     ("catenary_env.statics",),
     ("catenary_env.dynamics",),
     ("catenary_env.analysis",),
-    ("catenary_env.pipeline", "catenary_env.validation"),
+    ("catenary_env.pipeline", "catenary_env.validation", "catenary_env.blas_threads"),
     ("catenary_env.problems",),
     ("catenary_env.envs",),
     ("catenary_env",),  # the package's __init__: the re-exported API
