@@ -106,7 +106,7 @@ def test_every_problem_has_an_env_and_registration_is_idempotent() -> None:
     for env_id, name in zip(IDS, PROBLEMS, strict=True):
         spec = gym.spec(env_id)
         assert spec.entry_point == "catenary_env.envs.design_env:CatenaryDesignEnv"
-        assert spec.kwargs == {"problem": name}
+        assert spec.kwargs == {"problem": name, "vector_kwargs": {"autoreset_mode": "SameStep"}}
     assert catenary_env.envs.CatenaryDesignEnv is CatenaryDesignEnv
 
 
@@ -330,14 +330,11 @@ def test_step_before_reset_with_a_speed_range_is_refused() -> None:
 @pytest.mark.parametrize("mode", ["sync", "async"])
 def test_vector_env_simulates_every_step(fake_simulator: FakeSimulator, mode: str) -> None:
     n_envs, n_steps = 3, 4
-    vector_kwargs: dict[str, object] = {"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP}
-    if mode == "async":
-        vector_kwargs["context"] = "fork"  # the workers inherit the fake simulator
-    envs = gym.make_vec(
-        "Catenary-B1-v0",
-        num_envs=n_envs,
-        vectorization_mode=mode,
-        vector_kwargs=vector_kwargs,
+    envs = catenary_env.envs.make_vector_env(
+        n_envs,
+        problem="B1",
+        asynchronous=mode == "async",
+        vector_kwargs={"context": "fork"} if mode == "async" else None,  # workers inherit the fake
         speed_range=(250.0, 300.0),
         **FAST,
     )
@@ -446,7 +443,6 @@ def test_real_async_vector_env() -> None:
         "Catenary-B1-v0",
         num_envs=2,
         vectorization_mode="async",
-        vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP},
         **FAST,
     )
     try:

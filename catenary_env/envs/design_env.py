@@ -17,6 +17,7 @@ from ..model.definition import CatenaryDefinition
 from ..model.design import Design, check_speed
 from ..pipeline import Evaluation, Fidelity, en50367_mean_force
 from ..problems import DesignProblem, get_problem, resolve_fidelity
+from . import VECTOR_KWARGS
 
 OBJECTIVES = ("sigma", "mean_sigma_over_speeds", "worst_sigma_over_speeds")
 """Objective names: σ at one speed, the mean of σ over ``speeds_kmh``, the largest σ over ``speeds_kmh``."""
@@ -106,7 +107,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     Every episode is one step: `terminated=True` after it, `truncated=False`. Vector envs should use
     `autoreset_mode=gymnasium.vector.AutoresetMode.SAME_STEP`, so that no step is spent on a reset:
-    `gymnasium.make_vec("Catenary-B1-v0", n)` gives it.
+    `gymnasium.make_vec("Catenary-B1-v0", n)` gives it, with `vectorization_mode="async"` too.
 
     ## Info
 
@@ -137,6 +138,8 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     - `normalize_reward=False`: divide the reward by the reference design's objective.
     - `render_mode=None`: or `"rgb_array"`, a picture of the last design (the reference design before
       the first step) with its statistics.
+    - `vector_kwargs`: registered for `gymnasium.make_vec` (same-step autoreset), which reads it;
+      `gymnasium.make` passes it on, and the env refuses any other value.
 
     ```python
     >>> import gymnasium as gym
@@ -166,7 +169,13 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         speeds_kmh: tuple[float, ...] | None = None,
         normalize_reward: bool = False,
         render_mode: str | None = None,
+        vector_kwargs: dict[str, Any] | None = None,
     ) -> None:
+        if vector_kwargs is not None and vector_kwargs != VECTOR_KWARGS:
+            raise ValueError(
+                f"vector_kwargs = {vector_kwargs!r}: an option of gymnasium.make_vec, registered as "
+                f"{VECTOR_KWARGS!r}; a design env takes no other"
+            )
         self.problem: DesignProblem = get_problem(problem)
         self.fidelity: Fidelity = resolve_fidelity(fidelity, n_spans)
         self.objective = objective
