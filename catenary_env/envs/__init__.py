@@ -36,6 +36,8 @@ try:
 except ImportError as error:  # pragma: no cover - depends on the installation
     raise ImportError("the environments need gymnasium: pip install catenary-env[gym]") from error
 
+from .vector_options import VECTOR_KWARGS
+
 if TYPE_CHECKING:
     from .design_env import CatenaryDesignEnv
 
@@ -50,11 +52,6 @@ __all__ = [
 
 ENTRY_POINT = "catenary_env.envs.design_env:CatenaryDesignEnv"
 
-VECTOR_KWARGS = {"autoreset_mode": gymnasium.vector.AutoresetMode.SAME_STEP.value}
-"""The vector options registered with every env (same-step autoreset). ``gymnasium.make_vec`` reads a
-registered ``vector_kwargs`` in its sync and async modes (its default mode is sync without a
-``vector_entry_point``, so none is registered); ``gymnasium.make`` hands it to the env, which accepts
-only this value."""
 
 BUILTIN_PROBLEMS = ("BPresag", "B1", "B2", "B3", "SWPresag", "SW1", "SW2", "SW3")
 """The eight problems of ``catenary_env.problems.PROBLEMS``, by name, so that registering their envs on

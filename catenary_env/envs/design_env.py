@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from collections import OrderedDict
 from typing import Any
@@ -14,10 +15,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..analysis.statistics import ContactStatistics
 from ..model.definition import CatenaryDefinition
-from ..model.design import Design, check_speed
+from ..model.design import Design, check_speed, physical_warnings
 from ..pipeline import Evaluation, Fidelity, en50367_mean_force
 from ..problems import DesignProblem, get_problem, resolve_fidelity
-from . import VECTOR_KWARGS
+from ..problems.calibration_cache import quiet_calibrations
+from ..problems.speeds import SpeedsEvaluation, evaluate_over_speeds
+from .vector_options import VECTOR_KWARGS
 
 OBJECTIVES = ("sigma", "mean_sigma_over_speeds", "worst_sigma_over_speeds")
 """Objective names: σ at one speed, the mean of σ over ``speeds_kmh``, the largest σ over ``speeds_kmh``."""
@@ -127,8 +130,11 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ## Arguments
 
     - `problem`: problem name, one of the table above (set by the registered ID).
-    - `speed_kmh=300.0`: train speed, km/h (unused with a multi-speed objective or `speed_range`).
+    - `speed_kmh=None`: train speed, km/h (default 300; not with a multi-speed objective or `speed_range`).
     - `speed_range=None`: `(lo, hi)` km/h to draw the speed from at each reset.
+
+    A speed above 0.9 of the wave speed (the command line's limit too) is warned about: the contact force
+    is dominated by the wave-speed singularity there.
     - `n_spans=None`: spans in the section, overriding the fidelity's (the analysis section shrinks to
       `n_spans - 2` spans if needed).
     - `fidelity="study"`: `"study"` (20 spans, statistics on 10, Δt = 1 ms), `"test"` (5 spans, coarse
@@ -161,7 +167,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     def __init__(
         self,
         problem: str,
-        speed_kmh: float = 300.0,
+        speed_kmh: float | None = None,
         speed_range: tuple[float, float] | None = None,
         n_spans: int | None = None,
         fidelity: str | Fidelity = "study",
@@ -209,7 +215,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             if self.objective != "sigma":
                 raise ValueError("options['speed_kmh'] is only for objective='sigma'")
             speed = float(options["speed_kmh"])
-            check_speed(self.problem.catenary_definition, speed / 3.6)
+            _check_speed(self.problem.catenary_definition, speed)
             self._speeds = (speed,)
         elif self._speed_range is not None:
             lo, hi = math.ceil(self._speed_range[0]), math.floor(self._speed_range[1])
@@ -220,16 +226,18 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     def step(self, action: ArrayLike) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         if self._speed_range is not None and not self._reset_done:
             raise gym.error.ResetNeeded("call reset() first: it draws the speed from speed_range")
-        values = self._check_action(action)
+        values = self.problem.grid.check_vector(action, "action")
         clipped = bool(np.any(values < -1.0) or np.any(values > 1.0))
         x = self.action_to_x(values)
-        evaluations = self._evaluate(x)
-        objective, feasible = self._objective(evaluations)
-        reward = -objective / self._reference_objective() if self.normalize_reward else -objective
+        with quiet_calibrations():  # a training loop meets many speeds: no two lines on stderr for each
+            result = evaluate_over_speeds(functools.partial(self._evaluate, x), self._speeds)
+            objective = self._objective(result)
+            reward = -objective / self._reference_objective() if self.normalize_reward else -objective
         design = self.problem.design(x)
-        info = self._info(x, design, evaluations, objective, feasible, clipped)
+        info = self._info(x, design, result, objective, clipped)
         self._last = (design, f"{self.problem.name} design at {self._speed_text()}", self._summary(info))
-        self._last_trace = (evaluations[0].trace_position, evaluations[0].trace_force)
+        first = result.evaluations[0]
+        self._last_trace = (first.trace_position, first.trace_force)
         return self._observation(), float(reward), True, False, info
 
     def render(self) -> NDArray[np.uint8] | None:
@@ -259,82 +267,51 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     # -- helpers ------------------------------------------------------------------------------------------
 
-    def _check_action(self, action: ArrayLike) -> NDArray[np.float64]:
-        try:
-            values = np.asarray(action, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ValueError(
-                f"action must be an array of {self.problem.n_variables} numbers, got {action!r}"
-            ) from None
-        if values.shape != self.action_space.shape:
-            raise ValueError(
-                f"action must have shape {self.action_space.shape} ({', '.join(self.problem.variables)}), "
-                f"got shape {values.shape}"
-            )
-        if not np.all(np.isfinite(values)):
-            raise ValueError(f"action must be finite (no NaN or inf), got {values.tolist()}")
-        return values
+    def _evaluate(self, x: NDArray[np.float64], speed: float) -> Evaluation:
+        key = (tuple(x.tolist()), speed)
+        if key in self._memo:
+            self._memo.move_to_end(key)
+            return self._memo[key]
+        evaluation = self.problem.evaluate(x, speed, self.fidelity)
+        self.evaluation_count += 1
+        self._memo[key] = evaluation
+        if len(self._memo) > MEMO_SIZE:
+            self._memo.popitem(last=False)
+        return evaluation
 
-    def _evaluate(self, x: NDArray[np.float64]) -> list[Evaluation]:
-        evaluations: list[Evaluation] = []
-        for speed in self._speeds:
-            key = (tuple(x.tolist()), speed)
-            if key in self._memo:
-                self._memo.move_to_end(key)
-                evaluation = self._memo[key]
-            else:
-                evaluation = self.problem.evaluate(x, speed, self.fidelity)
-                self.evaluation_count += 1
-                self._memo[key] = evaluation
-                if len(self._memo) > MEMO_SIZE:
-                    self._memo.popitem(last=False)
-            evaluations.append(evaluation)
-            if evaluation.statistics is None:
-                break  # statically infeasible: the statics do not depend on the speed
-        return evaluations
-
-    def _aggregate(self, values: list[float]) -> float:
-        if self.objective == "worst_sigma_over_speeds":
-            return float(np.max(values))
-        return float(np.mean(values))  # one speed, or the mean over speeds
-
-    def _objective(self, evaluations: list[Evaluation]) -> tuple[float, bool]:
-        feasible = len(evaluations) == len(self._speeds) and all(e.feasible for e in evaluations)
-        if feasible:
-            return self._aggregate([e.statistics.std for e in evaluations if e.statistics is not None]), True
+    def _objective(self, result: SpeedsEvaluation) -> float:
+        worst = self.objective == "worst_sigma_over_speeds"
+        sigma = result.sigma(worst)
+        if sigma is not None:
+            return sigma
         penalty = [INFEASIBLE_SIGMA_OVER_MEAN * en50367_mean_force(v / 3.6) for v in self._speeds]
-        return self._aggregate(penalty), False
+        return float(np.max(penalty) if worst else np.mean(penalty))
 
     def _reference_objective(self) -> float:
-        sigmas = []
-        for speed in self._speeds:
-            reference = self.problem.reference_evaluation(speed, self.fidelity)
-            if not reference.feasible or reference.statistics is None:
-                raise RuntimeError(
-                    f"reward normalisation: the reference design of {self.problem.name} is infeasible "
-                    f"at {speed} km/h ({reference.reason})"
-                )
-            sigmas.append(reference.statistics.std)
-        return self._aggregate(sigmas)
+        reference = evaluate_over_speeds(
+            functools.partial(self.problem.reference_evaluation, fidelity=self.fidelity), self._speeds
+        )
+        sigma = reference.sigma(self.objective == "worst_sigma_over_speeds")
+        if sigma is None:
+            raise RuntimeError(
+                f"reward normalisation: the reference design of {self.problem.name} is infeasible "
+                f"({reference.reason})"
+            )
+        return sigma
 
     def _info(
         self,
         x: NDArray[np.float64],
         design: Design,
-        evaluations: list[Evaluation],
+        result: SpeedsEvaluation,
         objective: float,
-        feasible: bool,
         clipped: bool,
     ) -> dict[str, Any]:
         single = len(self._speeds) == 1
-        reasons = [
-            e.reason if single else f"at {v:g} km/h: {e.reason}"
-            for v, e in zip(self._speeds, evaluations, strict=False)
-            if not e.feasible
-        ]
+        evaluations = result.evaluations
         info: dict[str, Any] = {
-            "feasible": feasible,
-            "reason": "; ".join(reasons),
+            "feasible": result.feasible,
+            "reason": result.reason,
             "variables": dict(zip(self.problem.variables, x.tolist(), strict=True)),
             "design": design,
             "speed_kmh": self._speed_info(),
@@ -351,7 +328,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         )
         info["dropper_lengths"] = tuple(evaluations[0].dropper_lengths)
         info["dropper_forces"] = tuple(evaluations[0].dropper_forces)
-        info["wall_time"] = float(sum(e.wall_time for e in evaluations))
+        info["wall_time"] = result.wall_time
         info["clipped"] = clipped
         return info
 
@@ -376,9 +353,13 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         return ", ".join(f"{v:g}" for v in self._speeds) + " km/h"
 
 
+DEFAULT_SPEED_KMH = 300.0
+"""The train speed of an env given no speed, km/h."""
+
+
 def _speed_setting(
     catenary: CatenaryDefinition,
-    speed_kmh: float,
+    speed_kmh: float | None,
     speed_range: tuple[float, float] | None,
     objective: str,
     speeds_kmh: tuple[float, ...] | None,
@@ -386,9 +367,16 @@ def _speed_setting(
     """Check the speed arguments; return the speeds of the first episode (km/h) and the range, if any."""
     if objective not in OBJECTIVES:
         raise ValueError(f"objective = {objective!r}: must be one of {', '.join(OBJECTIVES)}")
+    if speed_kmh is not None and speed_range is not None:
+        raise ValueError(
+            f"speed_kmh = {speed_kmh!r} and speed_range = {speed_range!r}: give one, the speed or the range "
+            "drawn from at each reset"
+        )
     if objective != "sigma":
         if speed_range is not None:
             raise ValueError(f"speed_range cannot be combined with objective={objective!r}; give speeds_kmh")
+        if speed_kmh is not None:
+            raise ValueError(f"speed_kmh cannot be combined with objective={objective!r}; give speeds_kmh")
         if not speeds_kmh:
             raise ValueError(f"objective={objective!r} needs speeds_kmh, a tuple of speeds in km/h")
         speeds = tuple(float(v) for v in speeds_kmh)
@@ -397,7 +385,7 @@ def _speed_setting(
     elif speeds_kmh is not None:
         raise ValueError("speeds_kmh is for the multi-speed objectives; use speed_kmh or speed_range")
     elif speed_range is None:
-        speeds = checked = (float(speed_kmh),)
+        speeds = checked = (DEFAULT_SPEED_KMH if speed_kmh is None else float(speed_kmh),)
         bounds = None
     else:
         lo, hi = (float(v) for v in speed_range)
@@ -406,5 +394,13 @@ def _speed_setting(
         bounds = (lo, hi)
         checked, speeds = bounds, (float(math.ceil(lo)),)  # reset() draws the episode's speed
     for v in checked:
-        check_speed(catenary, v / 3.6)  # DesignError (a ValueError) naming the allowed range
+        _check_speed(catenary, v)
     return speeds, bounds
+
+
+def _check_speed(catenary: CatenaryDefinition, speed_kmh: float) -> None:
+    """Refuse a speed outside (0, wave speed) (a DesignError, a ValueError, naming the allowed range); warn
+    about one near the wave speed, as the command line does."""
+    check_speed(catenary, speed_kmh / 3.6)
+    for warning in physical_warnings(catenary, speed_kmh / 3.6, None):
+        gym.logger.warn(warning)
