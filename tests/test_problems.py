@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import itertools
 import pickle
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -30,6 +31,7 @@ from catenary_env.problems import (
     resolve_fidelity,
 )
 from catenary_env.problems.speeds import evaluate_over_speeds
+from catenary_env.problems.table import problem_table
 
 # The table of docs/problems.md, 'The eight problems', written out again so that a change to either is seen.
 SPEC_TABLE = {
@@ -158,6 +160,13 @@ def test_bad_variable_vectors_are_refused(bad: list) -> None:
         PROBLEMS["B1"].snap(bad)
     with pytest.raises(ValueError, match="problem B1: action must"):  # the env's actions: the same check
         PROBLEMS["B1"].grid.check_vector(bad, "action")
+
+
+def test_the_docs_problem_table_is_the_problems_own() -> None:
+    """docs/problems.md prints the one problem table (README and the env's docstring link to it)."""
+    docs = (Path(__file__).resolve().parents[1] / "docs" / "problems.md").read_text(encoding="utf-8")
+    assert problem_table(PROBLEMS.values()) + "\n" in docs
+    assert docs.count("| problem | catenary |") == 1
 
 
 # ---------------------------------------------------------------------------------------------------------

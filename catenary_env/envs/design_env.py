@@ -62,18 +62,8 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     change at dropper i (negative = lower); `d_i`: position of dropper i from the span's first support;
     dropper 1 is next to the support.
 
-    | Problem  | Catenary  | Drop. | Variables (m)     | Bounds (m)                                          |
-    |----------|-----------|-------|-------------------|-----------------------------------------------------|
-    | BPresag  | benchmark | 9     | s                 | [-0.02, 0.10]                                       |
-    | B1       | benchmark | 9     | dh_1 .. dh_5      | each [-0.02, 0.02]                                  |
-    | B2       | benchmark | 9     | d_1 .. d_4        | [0.1, 7.4], [7.5, 13.1], [13.2, 18.8], [18.9, 27.4] |
-    | B3       | benchmark | 5     | d_1, d_2, dh_1..3 | [0.1, 13.0], [13.1, 27.4]; dh [-0.02, 0.02]         |
-    | SWPresag | stitched  | 7     | s                 | [-0.02, 0.10]                                       |
-    | SW1      | stitched  | 7     | dh_1 .. dh_4      | each [-0.02, 0.02]                                  |
-    | SW2      | stitched  | 7     | d_1 .. d_3        | [0.1, 8.9], [9.1, 20.4], [20.5, 32.4]               |
-    | SW3      | stitched  | 5     | d_1, d_2, dh_1..3 | [2, 9], [10, 30]; dh [-0.02, 0.02]                  |
-
-    Drop.: droppers per span.
+    The variables and bounds of each problem: docs/problems.md, 'The eight problems' (the table
+    :func:`~catenary_env.problems.table.problem_table` writes from the problems).
 
     ## Observation Space
 
