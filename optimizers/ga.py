@@ -1,4 +1,4 @@
-"""The genetic algorithm of the reference study: MATLAB's ``ga`` on integer variables (docs/problems.md,
+"""The genetic algorithm of the published study: MATLAB's ``ga`` on integer variables (docs/problems.md,
 'Optimisers').
 
 MATLAB's ``ga`` with integer constraints replaces the user's operators by those of MI-LXPM (Deep, Singh,
