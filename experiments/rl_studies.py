@@ -34,7 +34,7 @@ Outputs (``results/rl/``): ``steps.csv`` (every training step), ``ga_runs.csv``,
 ``robust_design.png``.
 
 Settings. Full: the study fidelity, B1 and SW1, 1000 steps × 3 seeds for the learning curves, 2000 steps
-for the speed-conditioned policy (rollouts of 32 steps), 1000 simulations per GA run (the study's
+for the speed-conditioned policy (rollouts of 32 steps), 1000 simulations per GA run (the published study's
 population) at 200, 260, 300 and 320 km/h, 300 evaluations for the mean-σ GA (a population of 30, so
 ten generations), each at the 7 speeds 200–320 km/h every 20 km/h. Quick: the "test" fidelity, B1 only,
 about ten simulations per run, rollouts of 4 steps, a GA population of 6 (a smoke test, not a result).
@@ -69,7 +69,7 @@ SPEED_RANGE = (200.0, 320.0)
 GA_SPEEDS = (200.0, 260.0, 320.0)
 MEAN_POPULATION = 30
 """Population of the mean-σ GA: its 300 evaluations (2100 simulations) then make ten generations, where
-the study's population of 80 or 100 would make two or three."""
+the published study's population of 80 or 100 would make two or three."""
 
 
 def policy_options(n_steps: int) -> PPOOptions:

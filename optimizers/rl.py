@@ -137,7 +137,7 @@ class PPOOptions:
     with an orthogonal matrix of gain 0.01 and a zero bias, so the untrained policy proposes action 0, the
     centre of the bounds, give or take a fraction of a millimetre. On B1 and SW1 (every Δh in [-20, +20] mm)
     that is the reference design, the level wire. Its spread is ``exp(log_std_init)``: by default
-    :data:`POLICY_SPREAD`, the start of the published RL study (docs/problems.md, 'Experiments'), at which
+    :data:`POLICY_SPREAD`, the start of the RL study (docs/problems.md, 'Experiments'), at which
     most first proposals are feasible; :data:`BOX_WIDE_SPREAD` keeps stable-baselines3's box-wide start.
 
     Attributes
