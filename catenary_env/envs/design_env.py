@@ -113,18 +113,19 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     `max_support_uplift` in m; absent when the design was not simulated dynamically),
     `uplift_force` (N), `dropper_lengths` (m) and `dropper_forces` (N) of a central span,
     `wall_time` (s, of the simulations behind the result) and `clipped` (bool). With a multi-speed
-    objective, `speed_kmh`, the statistics and `uplift_force` are arrays over `speeds_kmh`.
+    objective, `speed_kmh`, the statistics and `uplift_force` are arrays over `speeds_kmh`; a design is
+    not simulated at the speeds after the first at which it is infeasible (the statistics are then absent,
+    `uplift_force` NaN there), as in the studies' mean-σ problem (`catenary_env.problems.speeds`).
     A design an env has already simulated (the last 1024, on the grid, at the same speed) is not
     simulated again: the step returns the stored result, `wall_time` included.
 
     ## Arguments
 
-    - `problem`: problem name, one of the table above (set by the registered ID).
+    - `problem`: problem name, one of docs/problems.md's table (set by the registered ID).
     - `speed_kmh=None`: train speed, km/h (default 300; not with a multi-speed objective or `speed_range`).
-    - `speed_range=None`: `(lo, hi)` km/h to draw the speed from at each reset.
-
-    A speed above 0.9 of the wave speed (the command line's limit too) is warned about: the contact force
-    is dominated by the wave-speed singularity there.
+    - `speed_range=None`: `(lo, hi)` km/h to draw the speed from at each reset. A speed (or range) above
+      0.9 of the wave speed is warned about, as on the command line: the wave-speed singularity dominates
+      the contact force there.
     - `n_spans=None`: spans in the section, overriding the fidelity's (the analysis section shrinks to
       `n_spans - 2` spans if needed).
     - `fidelity="study"`: `"study"` (20 spans, statistics on 10, Δt = 1 ms), `"test"` (5 spans, coarse
