@@ -52,7 +52,6 @@ __all__ = [
 
 ENTRY_POINT = "catenary_env.envs.design_env:CatenaryDesignEnv"
 
-
 BUILTIN_PROBLEMS = ("BPresag", "B1", "B2", "B3", "SWPresag", "SW1", "SW2", "SW3")
 """The eight problems of ``catenary_env.problems.PROBLEMS``, by name, so that registering their envs on
 ``import catenary_env`` needs no simulator (tests/test_envs.py checks that the two agree)."""
