@@ -9,7 +9,7 @@ study on the same store, simulates nothing twice.
 :class:`MeanSigmaProblem` poses the environments' ``objective="mean_sigma_over_speeds"``
 (docs/problems.md, 'Environments') as an optimisation problem for :func:`optimizers.runner.optimize`: one
 evaluation simulates the design at every speed and returns the mean σ; the design is infeasible where it
-is infeasible at any speed.
+is infeasible at any speed (one definition, :mod:`catenary_env.problems.speeds`, for both).
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from catenary_env.problems import evaluate_problem
+from catenary_env.problems.speeds import evaluate_over_speeds
 from optimizers.base import EvaluationRecord
 from optimizers.catenary_adapter import catenary_problem, simulate_catenary_design
 from optimizers.evaluation import make_backend
@@ -105,20 +106,15 @@ def evaluate_designs(
 def simulate_mean_sigma(
     problem: str, speeds_kmh: tuple[float, ...], x: tuple[float, ...], speed_kmh: float, fidelity: str
 ) -> Outcome:
-    """The mean σ of a design over ``speeds_kmh``: picklable, for worker processes.
+    """The mean σ of a design over ``speeds_kmh``
+    (:func:`~catenary_env.problems.speeds.evaluate_over_speeds`): picklable, for worker processes.
 
-    ``speed_kmh`` (the driver's) is not used: the speeds are the problem's. A statically infeasible design
-    is not simulated at the other speeds (the statics do not depend on the speed).
+    ``speed_kmh`` (the driver's) is not used: the speeds are the problem's.
     """
-    sigmas = []
-    wall_time = 0.0
-    for speed in speeds_kmh:
-        evaluation = evaluate_problem(problem, tuple(x), float(speed), fidelity)
-        wall_time += float(evaluation.wall_time)
-        if not evaluation.feasible or evaluation.statistics is None:
-            return Outcome(False, None, f"at {speed:g} km/h: {evaluation.reason}", wall_time)
-        sigmas.append(float(evaluation.statistics.std))
-    return Outcome(True, float(np.mean(sigmas)), "", wall_time)
+    result = evaluate_over_speeds(
+        functools.partial(evaluate_problem, problem, tuple(x), fidelity=fidelity), speeds_kmh
+    )
+    return Outcome(result.feasible, result.sigma(), result.reason, result.wall_time)
 
 
 @dataclass(frozen=True, eq=False)

@@ -3,12 +3,12 @@
 
 For each problem B1, B2, B3, SW1, SW2, SW3:
 
-1. *Design study*: the study's genetic algorithm (``optimizers.ga``, MATLAB's integer ``ga`` with the
-   study's population sizes, stall rule and generation limit) at 300 km/h; its best design is confirmed on
-   the exact model (fidelity ``"reference"``), together with the reference design, and both σ are reported.
+1. *Design study*: the published study's genetic algorithm (``optimizers.ga``, MATLAB's integer ``ga`` with
+   that study's population sizes, stall rule and generation limit) at 300 km/h; its best design is confirmed
+   on the exact model (fidelity ``"reference"``), together with the reference design, and both σ are reported.
 2. *Static analysis*: contact-wire stiffness along the central span at 100 N and 200 N, its variability
-   α = (k_max − k_min) / (k_max + k_min) and static dropper forces, for the reference and the optimum.
-3. *Speed robustness*: σ of the reference and the optimum from 200 to 320 km/h.
+   α = (k_max − k_min) / (k_max + k_min) and static dropper forces, for the reference design and the optimum.
+3. *Speed robustness*: σ of the reference design and the optimum from 200 to 320 km/h.
 
 Every simulation is resumable: the GA's evaluations live in the run store the studies share
 (``runs.sqlite`` in the output folder; an interrupted GA replays its stored evaluations and goes on), and
@@ -17,8 +17,8 @@ that nothing is simulated twice. Each problem writes its data under ``design/<pr
 is done; :func:`report` makes the tables and figures from those files alone.
 
 Quick: the ``"test"`` fidelity (a short, coarse section), a GA of 10 individuals over 2 generations,
-7 stiffness points, 3 speeds. Full: 20 spans on the study fidelity, the study's GA, 23 stiffness points,
-200–320 km/h in 20 km/h steps.
+7 stiffness points, 3 speeds. Full: 20 spans on the study fidelity, the published study's GA, 23 stiffness
+points, 200–320 km/h in 20 km/h steps.
 
     python -m experiments.design_studies [--full] [--problems B1 SW1] [--workers 2] [--out results]
 """

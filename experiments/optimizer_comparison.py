@@ -1,8 +1,8 @@
 """Study 4: which optimiser finds the smoothest design with the fewest simulations (docs/problems.md,
 'Experiments').
 
-The study's GA, nevergrad's CMA-ES, DE, PSO, random search and NGOpt, and the PPO design policy, on B1
-and SW1 at 300 km/h, each with the same budget of simulations and several seeds. Every run goes to one
+The published study's GA, nevergrad's CMA-ES, DE, PSO, random search and NGOpt, and the PPO design policy, on
+B1 and SW1 at 300 km/h, each with the same budget of simulations and several seeds. Every run goes to one
 run store (the studies' shared ``runs.sqlite`` in the output folder, or ``Config.store``) and is resumed
 from it: a study run again, or interrupted and restarted, replays what is stored and simulates only what
 is missing, and a design simulated by one run is served to the others from the store's cache (it is still

@@ -16,12 +16,12 @@ B1 and SW1 (every Δh in [-20, +20] mm) are centred on the reference design (the
 the reference design. stable-baselines3 initialises the layer that gives the Gaussian policy's mean with
 an orthogonal matrix of gain 0.01 and a zero bias, so the untrained policy proposes the reference design
 give or take a fraction of a millimetre; the spread of its proposals is set by ``log_std_init`` =
-ln 0.2 (:data:`POLICY_SPREAD`): a standard deviation of 0.2 action units, 4 mm of height. A spread of 1
-(the default, ±20 mm) proposes mostly infeasible designs (slack droppers, contact loss) and a policy
-learns nothing from a few hundred −Fm rewards; at 4 mm, most proposals are feasible (on the test
-fidelity, 14 of 16 on B1 and 15 of 16 on SW1 in a check before the study; ``rl.md`` gives the share each
-run met). :func:`check_starts_at_reference` refuses a problem whose bounds are not centred on its
-reference design (B2, B3, SW2, SW3), where this start would not hold.
+ln 0.2 (:data:`optimizers.rl.POLICY_SPREAD`, PPO's default): a standard deviation of 0.2 action units, 4 mm
+of height. A spread of 1 (stable-baselines3's default, ±20 mm) proposes mostly infeasible designs (slack
+droppers, contact loss) and a policy learns nothing from a few hundred −Fm rewards; at 4 mm, most
+proposals are feasible (on the test fidelity, 14 of 16 on B1 and 15 of 16 on SW1 in a check before the
+study; ``rl.md`` gives the share each run met). :func:`check_starts_at_reference` refuses a problem whose
+bounds are not centred on its reference design (B2, B3, SW2, SW3), where this start would not hold.
 
 Every run goes to a run store (the studies' shared ``runs.sqlite`` in the output folder, or
 ``Config.store``) and is resumed from it; the designs no run asked for (the reference, the policy's
@@ -34,7 +34,7 @@ Outputs (``results/rl/``): ``steps.csv`` (every training step), ``ga_runs.csv``,
 ``robust_design.png``.
 
 Settings. Full: the study fidelity, B1 and SW1, 1000 steps × 3 seeds for the learning curves, 2000 steps
-for the speed-conditioned policy (rollouts of 32 steps), 1000 simulations per GA run (the study's
+for the speed-conditioned policy (rollouts of 32 steps), 1000 simulations per GA run (the published study's
 population) at 200, 260, 300 and 320 km/h, 300 evaluations for the mean-σ GA (a population of 30, so
 ten generations), each at the 7 speeds 200–320 km/h every 20 km/h. Quick: the "test" fidelity, B1 only,
 about ten simulations per run, rollouts of 4 steps, a GA population of 6 (a smoke test, not a result).
@@ -45,7 +45,6 @@ about ten simulations per run, rollouts of 4 steps, a GA population of 6 (a smok
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -68,17 +67,16 @@ NAME = "rl"
 SPEED_KMH = 300.0
 SPEED_RANGE = (200.0, 320.0)
 GA_SPEEDS = (200.0, 260.0, 320.0)
-POLICY_SPREAD = 0.2
-"""Standard deviation of the untrained policy's actions, action units (0.2 = 4 mm of height on B1, SW1)."""
 MEAN_POPULATION = 30
 """Population of the mean-σ GA: its 300 evaluations (2100 simulations) then make ten generations, where
-the study's population of 80 or 100 would make two or three."""
+the published study's population of 80 or 100 would make two or three."""
 
 
 def policy_options(n_steps: int) -> PPOOptions:
     """PPO settings of the studies: rollouts (and minibatches) of ``n_steps`` steps, the policy starting at
-    the reference design with a spread of :data:`POLICY_SPREAD` (see the module's docstring)."""
-    return PPOOptions(n_steps=n_steps, batch_size=n_steps, log_std_init=math.log(POLICY_SPREAD))
+    the reference design with PPO's default spread, :data:`optimizers.rl.POLICY_SPREAD` (see the module's
+    docstring)."""
+    return PPOOptions(n_steps=n_steps, batch_size=n_steps)
 
 
 def check_starts_at_reference(problem: str) -> None:

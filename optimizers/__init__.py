@@ -1,5 +1,5 @@
-"""Optimisers for the catenary design problems (docs/problems.md, 'Optimisers'): the study's GA, nevergrad, RL
-design policies.
+"""Optimisers for the catenary design problems (docs/problems.md, 'Optimisers'): the published study's GA,
+nevergrad, RL design policies.
 
 Every ask / tell optimiser is registered in :data:`OPTIMIZERS` and run by :func:`optimize`, which owns
 the budget, the run store (resume, cache) and the parallel evaluation. The RL design policy is trained

@@ -1,4 +1,4 @@
-"""The genetic algorithm of the reference study: MATLAB's ``ga`` on integer variables (docs/problems.md,
+"""The genetic algorithm of the published study: MATLAB's ``ga`` on integer variables (docs/problems.md,
 'Optimisers').
 
 MATLAB's ``ga`` with integer constraints replaces the user's operators by those of MI-LXPM (Deep, Singh,
@@ -18,7 +18,7 @@ design's own integer units (mm, cm), which is how the study posed its variables 
 operator files are not published (p-code), so this follows the MI-LXPM paper and MATLAB's documented
 options; where either is silent, the docstring of the operator says what is done and why.
 
-Hyper-parameters (:class:`GAOptions`) default to the study's settings: population size per problem
+Hyper-parameters (:class:`GAOptions`) default to the published study's settings: population size per problem
 (:data:`POPULATION_SIZES`), 3 elite individuals, crossover fraction 0.8, stall window 50 generations,
 function tolerance 1e-6, and MATLAB's generation limit of 100 × the number of variables.
 
@@ -58,13 +58,14 @@ POPULATION_SIZES: dict[str, int] = {
     "B1": 100,
     "B2": 80,
     "B3": 100,
-    # The study gives no population for the stitched catenary's pre-sag: like BPresag (one variable).
+    # The published study gives no population for the stitched catenary's pre-sag: like BPresag (one
+    # variable).
     "SWPresag": 15,
     "SW1": 80,
     "SW2": 60,
     "SW3": 100,
 }
-"""Population size of the study's GA runs per problem (docs/problems.md, 'Optimisers')."""
+"""Population size of the published study's GA runs per problem (docs/problems.md, 'Optimisers')."""
 
 
 class RandomSource(Protocol):
@@ -82,7 +83,7 @@ class GAOptions:
     Attributes
     ----------
     population_size : int or None
-        Individuals per generation [PopulationSize]; None: :data:`POPULATION_SIZES` for the study's
+        Individuals per generation [PopulationSize]; None: :data:`POPULATION_SIZES` for the published study's
         problems, else MATLAB's default, 50 for up to 5 variables and 200 above.
     elite_count : int
         Best individuals copied unchanged into the next generation [EliteCount].
@@ -323,7 +324,7 @@ class GeneticAlgorithm(Optimizer):
     seed : int
         Random seed.
     options : GAOptions, optional
-        Hyper-parameters; the study's defaults.
+        Hyper-parameters; the published study's defaults.
     """
 
     name = "ga"
@@ -398,5 +399,7 @@ def _population_size(space: GridSpace, options: GAOptions) -> int:
 
 
 register_optimizer(
-    OptimizerSpec("ga", GeneticAlgorithm, GAOptions, "the study's genetic algorithm (MATLAB ga, integer)")
+    OptimizerSpec(
+        "ga", GeneticAlgorithm, GAOptions, "the published study's genetic algorithm (MATLAB ga, integer)"
+    )
 )

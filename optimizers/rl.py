@@ -43,6 +43,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import json
+import math
 import os
 import tempfile
 import time
@@ -62,6 +63,8 @@ from .recorder import RunRecorder, open_run, package_version
 from .store import RunConfig, RunStore
 
 __all__ = [
+    "BOX_WIDE_SPREAD",
+    "POLICY_SPREAD",
     "DesignPolicy",
     "EnvSpec",
     "ObservationScaling",
@@ -116,9 +119,26 @@ class EnvSpec:
         return gymnasium.make(self.env_id, speed_kmh=self.speed_kmh, fidelity=self.fidelity)
 
 
+POLICY_SPREAD = 0.2
+"""Standard deviation of the untrained policy's actions by default, action units (the range being 2): 0.2 is
+4 mm of height on B1 and SW1, where most proposals around the reference design are feasible."""
+
+BOX_WIDE_SPREAD = 1.0
+"""stable-baselines3's own initial spread, action units: proposals over the whole box (±20 mm of height on
+B1), mostly infeasible (slack droppers, contact loss). ``PPOOptions(log_std_init=math.log(BOX_WIDE_SPREAD))``
+keeps it."""
+
+
 @dataclass(frozen=True)
 class PPOOptions:
     """PPO hyper-parameters (stable-baselines3 names).
+
+    Where the policy starts: stable-baselines3 initialises the layer that gives the Gaussian policy's mean
+    with an orthogonal matrix of gain 0.01 and a zero bias, so the untrained policy proposes action 0, the
+    centre of the bounds, give or take a fraction of a millimetre. On B1 and SW1 (every Δh in [-20, +20] mm)
+    that is the reference design, the level wire. Its spread is ``exp(log_std_init)``: by default
+    :data:`POLICY_SPREAD`, the start of the RL study (docs/problems.md, 'Experiments'), at which
+    most first proposals are feasible; :data:`BOX_WIDE_SPREAD` keeps stable-baselines3's box-wide start.
 
     Attributes
     ----------
@@ -135,7 +155,8 @@ class PPOOptions:
     net_arch : tuple of int
         Hidden layer widths of the policy and value networks.
     log_std_init : float
-        Initial log standard deviation of the Gaussian actions (in action units, the range being 2).
+        Initial log standard deviation of the Gaussian actions (in action units, the range being 2);
+        default ln :data:`POLICY_SPREAD`.
     normalize_observation : bool
         Standardise observations with running statistics (SB3's ``VecNormalize``). The speed enters the
         observation as a fraction of the wave speed, a narrow band (0.43 to 0.70 for 200 to 320 km/h on
@@ -154,7 +175,7 @@ class PPOOptions:
     n_epochs: int = 10
     ent_coef: float = 0.0
     net_arch: tuple[int, ...] = (64, 64)
-    log_std_init: float = 0.0
+    log_std_init: float = math.log(POLICY_SPREAD)
     normalize_observation: bool = True
     normalize_reward: bool = True
     device: str = "cpu"

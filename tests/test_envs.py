@@ -106,7 +106,7 @@ def test_every_problem_has_an_env_and_registration_is_idempotent() -> None:
     for env_id, name in zip(IDS, PROBLEMS, strict=True):
         spec = gym.spec(env_id)
         assert spec.entry_point == "catenary_env.envs.design_env:CatenaryDesignEnv"
-        assert spec.kwargs == {"problem": name}
+        assert spec.kwargs == {"problem": name, "vector_kwargs": {"autoreset_mode": "SameStep"}}
     assert catenary_env.envs.CatenaryDesignEnv is CatenaryDesignEnv
 
 
@@ -252,6 +252,42 @@ def test_multi_speed_objectives(fake_simulator: FakeSimulator, objective: str, a
     assert fake_simulator.calibrations == 3  # one pantograph setting per speed
 
 
+def test_the_env_and_the_studies_share_the_mean_sigma_objective(fake_simulator: FakeSimulator) -> None:
+    from experiments.design_evaluations import simulate_mean_sigma
+
+    speeds = (200.0, 250.0, 320.0)
+    env = make("Catenary-B1-v0", objective="mean_sigma_over_speeds", speeds_kmh=speeds)
+    env.reset(seed=0)
+    action = np.array([0.2, -0.1, 0.0, 0.3, -0.2], np.float32)
+    _, reward, _, _, info = env.step(action)
+    x = tuple(info["variables"].values())
+    outcome = simulate_mean_sigma("B1", speeds, x, 300.0, resolve_fidelity("test", 5))
+    assert outcome.feasible and reward == pytest.approx(-outcome.sigma, rel=1e-12)
+
+
+def test_speeds_near_the_wave_speed_are_warned_about(fake_simulator: FakeSimulator) -> None:
+    with pytest.warns(UserWarning, match="wave speed"):  # 0.94 of the benchmark's 459.6 km/h
+        make("Catenary-B1-v0", speed_kmh=430.0)
+    with pytest.warns(UserWarning, match="wave speed"):
+        make("Catenary-B1-v0", speed_range=(300.0, 430.0))
+    env = make("Catenary-B1-v0", speed_kmh=300.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # 300 km/h: no warning
+        env.reset(seed=0)
+    with pytest.warns(UserWarning, match="430.0 km/h is 0.936 of the contact wire's wave speed"):
+        env.reset(options={"speed_kmh": 430.0})
+
+
+def test_calibrations_are_not_announced_inside_the_env(fake_simulator: FakeSimulator, capsys) -> None:
+    env = make("Catenary-SW1-v0", speed_range=(200.0, 320.0))
+    for speed in (210.0, 250.0, 290.0):  # three speeds, three calibrations, silent
+        env.reset(seed=0, options={"speed_kmh": speed})
+        env.step(np.zeros(4, np.float32))
+    assert fake_simulator.calibrations == 3 and "calibrating" not in capsys.readouterr().err
+    PROBLEMS["SW1"].uplift_force(300.0, "test")  # outside an env (the command line): announced
+    assert "calibrating the pantograph uplift" in capsys.readouterr().err
+
+
 def test_a_repeated_design_is_not_simulated_again(fake_simulator: FakeSimulator) -> None:
     env = make("Catenary-B1-v0")
     env.reset(seed=0)
@@ -272,6 +308,8 @@ def test_a_repeated_design_is_not_simulated_again(fake_simulator: FakeSimulator)
             {"objective": "mean_sigma_over_speeds", "speeds_kmh": (250.0,), "speed_range": (200.0, 300.0)},
             "speed_range",
         ),
+        ({"speed_kmh": 250.0, "speed_range": (200.0, 300.0)}, "speed_kmh = 250.0 and speed_range"),
+        ({"objective": "mean_sigma_over_speeds", "speeds_kmh": (250.0,), "speed_kmh": 250.0}, "speed_kmh"),
         ({"speed_kmh": 480.0}, "wave speed"),
         ({"speed_kmh": -5.0}, "km/h"),
         ({"speed_range": (300.0, 200.0)}, "speed_range"),
@@ -330,14 +368,11 @@ def test_step_before_reset_with_a_speed_range_is_refused() -> None:
 @pytest.mark.parametrize("mode", ["sync", "async"])
 def test_vector_env_simulates_every_step(fake_simulator: FakeSimulator, mode: str) -> None:
     n_envs, n_steps = 3, 4
-    vector_kwargs: dict[str, object] = {"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP}
-    if mode == "async":
-        vector_kwargs["context"] = "fork"  # the workers inherit the fake simulator
-    envs = gym.make_vec(
-        "Catenary-B1-v0",
-        num_envs=n_envs,
-        vectorization_mode=mode,
-        vector_kwargs=vector_kwargs,
+    envs = catenary_env.envs.make_vector_env(
+        n_envs,
+        problem="B1",
+        asynchronous=mode == "async",
+        vector_kwargs={"context": "fork"} if mode == "async" else None,  # workers inherit the fake
         speed_range=(250.0, 300.0),
         **FAST,
     )
@@ -446,7 +481,6 @@ def test_real_async_vector_env() -> None:
         "Catenary-B1-v0",
         num_envs=2,
         vectorization_mode="async",
-        vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP},
         **FAST,
     )
     try:

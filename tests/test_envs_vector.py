@@ -13,7 +13,7 @@ gym = pytest.importorskip("gymnasium")
 
 from gymnasium.vector import AsyncVectorEnv, AutoresetMode, SyncVectorEnv  # noqa: E402
 
-from catenary_env.envs import BUILTIN_PROBLEMS, register_envs  # noqa: E402
+from catenary_env.envs import BUILTIN_PROBLEMS, make_vector_env, register_envs  # noqa: E402
 from catenary_env.problems import PROBLEMS  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -24,47 +24,62 @@ def test_the_builtin_names_are_the_problems():
     assert list(BUILTIN_PROBLEMS) == list(PROBLEMS)
 
 
-def test_make_vec_resets_in_the_same_step_and_simulates_at_every_step():
+def _two_steps_simulate_twice(envs) -> None:
+    """Two steps of a 2-env vector: each env simulates a design at both, every reward is a real −σ."""
+    assert envs.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
+    observation, _ = envs.reset(seed=0)
+    for step in range(2):
+        actions = np.full((2, 5), -0.5 + 0.5 * step, dtype=np.float32)
+        actions[1, 0] = 0.25  # two designs per step
+        after, reward, terminated, truncated, info = envs.step(actions)
+        assert terminated.all() and not truncated.any()
+        assert np.all(np.isfinite(reward)) and np.all(reward < 0.0)  # next-step autoreset: 0 at step 2
+        assert "final_obs" in info  # the episode's end, reset within the step
+        np.testing.assert_array_equal(after, observation)  # one speed: the reset observation
+    assert envs.get_attr("evaluation_count") == (2, 2)
+
+
+@pytest.mark.parametrize(
+    ("mode", "vector_class"), [(None, SyncVectorEnv), ("sync", SyncVectorEnv), ("async", AsyncVectorEnv)]
+)
+def test_make_vec_resets_in_the_same_step_in_every_mode(mode, vector_class):
     register_envs()
-    envs = gym.make_vec("Catenary-B1-v0", 2, **FAST)
+    envs = gym.make_vec("Catenary-B1-v0", 2, vectorization_mode=mode, **FAST)
     try:
-        assert isinstance(envs, SyncVectorEnv)
-        assert envs.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
-        observation, _ = envs.reset(seed=0)
-        for step in range(2):
-            actions = np.full((2, 5), -0.5 + 0.5 * step, dtype=np.float32)
-            actions[1, 0] = 0.25  # two designs per step
-            after, reward, terminated, truncated, info = envs.step(actions)
-            assert terminated.all() and not truncated.any()
-            assert np.all(np.isfinite(reward)) and np.all(reward < 0.0)
-            assert "final_obs" in info  # the episode's end, reset within the step
-            np.testing.assert_array_equal(after, observation)  # one speed: the reset observation
-        # Next-step autoreset would have spent the second step on resets: here each env simulated twice.
-        assert envs.get_attr("evaluation_count") == (2, 2)
+        assert isinstance(envs, vector_class)
+        _two_steps_simulate_twice(envs)
     finally:
         envs.close()
 
 
-def test_make_vec_passes_the_envs_arguments_and_can_run_envs_in_processes():
+def test_make_vec_passes_the_envs_arguments():
     register_envs()
-    envs = gym.make_vec("Catenary-SW2-v0", 2, speed_kmh=250.0, asynchronous=True, **FAST)
+    envs = gym.make_vec("Catenary-SW2-v0", 2, vectorization_mode="async", speed_kmh=250.0, **FAST)
     try:
-        assert isinstance(envs, AsyncVectorEnv)
-        assert envs.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
         assert envs.get_attr("fidelity")[0].n_spans == 3
+        _, info = envs.reset(seed=0)
+        np.testing.assert_array_equal(info["speed_kmh"], [250.0, 250.0])
+    finally:
+        envs.close()
+
+
+def test_make_vector_env_is_make_vec_with_more_vector_options():
+    register_envs()
+    envs = make_vector_env(2, problem="B1", asynchronous=True, vector_kwargs={"shared_memory": False}, **FAST)
+    try:
+        assert isinstance(envs, AsyncVectorEnv) and envs.shared_memory is False
+        _two_steps_simulate_twice(envs)
     finally:
         envs.close()
     with pytest.raises(ValueError, match="num_envs"):
-        gym.make_vec("Catenary-B1-v0", 0, **FAST)
+        make_vector_env(0, problem="B1", **FAST)
 
 
-def test_make_vec_in_the_other_modes_is_gymnasiums_own():
+def test_a_single_env_refuses_other_vector_options():
     register_envs()
-    envs = gym.make_vec("Catenary-B1-v0", 2, vectorization_mode="sync", **FAST)
-    try:
-        assert envs.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP  # Gymnasium's default, asked for
-    finally:
-        envs.close()
+    gym.make("Catenary-B1-v0", **FAST).close()  # the registered vector_kwargs pass
+    with pytest.raises(ValueError, match="vector_kwargs.*gymnasium.make_vec"):
+        gym.make("Catenary-B1-v0", vector_kwargs={"autoreset_mode": "NextStep"}, **FAST)
 
 
 @pytest.mark.parametrize(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 import sqlite3
 from typing import Any
 
@@ -13,7 +14,13 @@ gymnasium = pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
 from optimizers.problem import GridSpace  # noqa: E402
-from optimizers.rl import EnvSpec, PPOOptions, design_for_speed, train_design_policy  # noqa: E402
+from optimizers.rl import (  # noqa: E402
+    BOX_WIDE_SPREAD,
+    EnvSpec,
+    PPOOptions,
+    design_for_speed,
+    train_design_policy,
+)
 from optimizers.synthetic import QuadraticProblem  # noqa: E402
 
 ENV_ID = "TestSpeedQuadraticDesign-v0"
@@ -173,7 +180,11 @@ def test_ppo_runs_on_the_same_env_share_their_steps(tmp_path):
 
 @pytest.mark.slow  # 50 s of PPO training; the budget and resume tests above keep PPO in every run
 def test_speed_conditioned_policy_learns_the_design_per_speed():
-    options = PPOOptions(n_steps=256, batch_size=64, n_epochs=10, learning_rate=1e-3, net_arch=(32, 32))
+    # From the box-wide start: the small default spread starts next to this problem's optimum already.
+    options = PPOOptions(
+        n_steps=256, batch_size=64, n_epochs=10, learning_rate=1e-3, net_arch=(32, 32),
+        log_std_init=math.log(BOX_WIDE_SPREAD),
+    )  # fmt: skip
     policy, result = train_design_policy(SPEED_RANGE, PROBLEM, budget=2048, seed=0, options=options)
     assert result.speed_kmh is None
     speeds = {record.speed_kmh for record in result.history}
@@ -188,6 +199,30 @@ def test_speed_conditioned_policy_learns_the_design_per_speed():
     # The minimiser moves from (-0.01, 0.01) m at 200 km/h to (0.01, -0.01) m at 300 km/h: so does the policy.
     assert designs[200.0][0] < designs[250.0][0] < designs[300.0][0]
     assert designs[200.0][1] > designs[250.0][1] > designs[300.0][1]
+
+
+def test_ppo_starts_at_the_reference_design_of_b1_with_a_small_spread():
+    """The issue's ``catenary optimize B1 --optimizer ppo --budget 12``: by default the untrained policy's
+    proposals lie around the reference design (the level wire) and some are feasible; stable-baselines3's
+    box-wide spread, kept as an option, proposes designs tens of mm off it, none feasible here."""
+    from catenary_env.envs import register_envs
+    from catenary_env.problems import get_problem
+    from optimizers.catenary_adapter import catenary_problem
+
+    register_envs()
+    spec = EnvSpec("Catenary-B1-v0", speed_kmh=300.0, fidelity="test")
+    problem = catenary_problem("B1")
+    reference = get_problem("B1").reference_x()
+    box_wide = PPOOptions(log_std_init=math.log(BOX_WIDE_SPREAD))
+    _, default = train_design_policy(spec, problem, budget=12, seed=0)
+    _, wide = train_design_policy(spec, problem, budget=12, seed=0, options=box_wide)
+
+    def rms_offset_mm(history):
+        return 1e3 * float(np.sqrt(np.mean([np.square(np.array(r.x) - reference) for r in history])))
+
+    assert rms_offset_mm(default.history) < 6.0 < 12.0 < rms_offset_mm(wide.history)  # spread 4 mm, 20 mm
+    assert default.best_x is not None  # a feasible design among the first 12 proposals
+    assert sum(r.feasible for r in default.history) > sum(r.feasible for r in wide.history)
 
 
 def test_env_spec_refuses_nothing_silently():

@@ -8,11 +8,13 @@ from __future__ import annotations
 
 import itertools
 import pickle
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from catenary_env import pipeline
+from catenary_env.analysis.statistics import ContactStatistics
 from catenary_env.model.design import Design, DesignError, check_design
 from catenary_env.model.presets import load_catenary
 from catenary_env.pipeline import FIDELITIES, Evaluation, Fidelity
@@ -28,6 +30,8 @@ from catenary_env.problems import (
     register_problem,
     resolve_fidelity,
 )
+from catenary_env.problems.speeds import evaluate_over_speeds
+from catenary_env.problems.table import problem_table
 
 # The table of docs/problems.md, 'The eight problems', written out again so that a change to either is seen.
 SPEC_TABLE = {
@@ -152,8 +156,47 @@ def test_out_of_bounds_and_check_name_the_variable_and_its_bounds() -> None:
     [[0.0] * 4, [0.0] * 6, [[0.0] * 5], [float("nan"), 0, 0, 0, 0], [float("inf"), 0, 0, 0, 0], ["a"] * 5],
 )
 def test_bad_variable_vectors_are_refused(bad: list) -> None:
-    with pytest.raises(ValueError, match="problem B1"):
+    with pytest.raises(ValueError, match="problem B1: x must"):
         PROBLEMS["B1"].snap(bad)
+    with pytest.raises(ValueError, match="problem B1: action must"):  # the env's actions: the same check
+        PROBLEMS["B1"].grid.check_vector(bad, "action")
+
+
+def test_the_docs_problem_table_is_the_problems_own() -> None:
+    """docs/problems.md prints the one problem table (README and the env's docstring link to it)."""
+    docs = (Path(__file__).resolve().parents[1] / "docs" / "problems.md").read_text(encoding="utf-8")
+    assert problem_table(PROBLEMS.values()) + "\n" in docs
+    assert docs.count("| problem | catenary |") == 1
+
+
+# ---------------------------------------------------------------------------------------------------------
+# σ over several speeds (the multi-speed objectives of the envs and the studies)
+
+
+def _evaluation(feasible: bool, sigma: float) -> Evaluation:
+    statistics = ContactStatistics(150.0, sigma, sigma / 150.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    return Evaluation(feasible, "" if feasible else "dynamic: contact lost", statistics, (), (), 150.0, 2.0)
+
+
+def test_sigma_over_speeds_is_the_mean_or_the_largest_and_stops_at_an_infeasible_speed() -> None:
+    sigmas = {200.0: 20.0, 260.0: 26.0, 320.0: 23.0}
+    asked: list[float] = []
+
+    def evaluate(speed_kmh: float) -> Evaluation:
+        asked.append(speed_kmh)
+        return _evaluation(speed_kmh in sigmas, sigmas.get(speed_kmh, 30.0))
+
+    result = evaluate_over_speeds(evaluate, (200.0, 260.0, 320.0))
+    assert result.feasible and result.reason == "" and result.wall_time == 6.0
+    assert result.sigma() == pytest.approx(23.0) and result.sigma(worst=True) == 26.0
+    asked.clear()
+    result = evaluate_over_speeds(evaluate, (200.0, 300.0, 320.0))
+    assert asked == [200.0, 300.0]  # decided at 300 km/h: 320 km/h is not simulated
+    assert not result.feasible and result.sigma() is None
+    assert result.reason == "at 300 km/h: dynamic: contact lost"
+    assert evaluate_over_speeds(evaluate, (300.0,)).reason == "dynamic: contact lost"  # one speed
+    with pytest.raises(ValueError, match="speeds_kmh"):
+        evaluate_over_speeds(evaluate, ())
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -1,8 +1,7 @@
 """The README's Python example runs as printed (STYLE: doc examples are run) and gives a σ.
 
-The example lives in ``docs/envs_table.md`` (pasted into ``README.md``); every Python block that makes a
-``Catenary-`` environment, in either file, is run in a fresh interpreter, as a user would run it: so it
-also checks that ``import catenary_env`` registers the environments.
+Every Python block of ``README.md`` that makes a ``Catenary-`` environment is run in a fresh interpreter,
+as a user would run it: so it also checks that ``import catenary_env`` registers the environments.
 """
 
 from __future__ import annotations
@@ -18,7 +17,7 @@ import pytest
 pytest.importorskip("gymnasium", reason="the environments need gymnasium")
 
 ROOT = Path(__file__).resolve().parents[1]
-SOURCES = [ROOT / "docs" / "envs_table.md", ROOT / "README.md"]
+SOURCES = [ROOT / "README.md"]
 BLOCK = re.compile(r"```python\n(.*?)```", re.DOTALL)
 
 
@@ -33,7 +32,7 @@ def examples() -> list[tuple[str, str]]:
 
 
 def test_the_example_is_there() -> None:
-    assert any(name.startswith("envs_table.md") for name, _ in examples())
+    assert any(name.startswith("README.md") for name, _ in examples())
 
 
 @pytest.mark.parametrize(("name", "code"), examples(), ids=[name for name, _ in examples()])

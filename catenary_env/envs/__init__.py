@@ -5,11 +5,14 @@ Since Gymnasium 1.0 a third-party package registers its environments on import; 
 does it and may be called any number of times. ``import catenary_env`` registers the eight problems' envs
 without importing the simulator (the entry points are strings).
 
-Every episode is one step, so a vector env should reset a finished env within the same step:
-``gymnasium.make_vec("Catenary-B1-v0", 4)`` gives a :class:`gymnasium.vector.SyncVectorEnv` with
-``autoreset_mode=SAME_STEP`` through the registered vector entry point, :func:`make_vector_env`
-(``asynchronous=True``: an :class:`~gymnasium.vector.AsyncVectorEnv`, one process per env). Gymnasium's
-own default, next-step autoreset, would spend every second step on a reset.
+Every episode is one step, so a vector env should reset a finished env within the same step; Gymnasium's
+own default, next-step autoreset, would spend every second step on a reset. Each env is registered with
+:data:`VECTOR_KWARGS` among its keyword arguments, which ``gymnasium.make_vec`` takes as its vector
+options in every mode: ``gymnasium.make_vec("Catenary-B1-v0", 4)`` gives a
+:class:`~gymnasium.vector.SyncVectorEnv` and ``vectorization_mode="async"`` an
+:class:`~gymnasium.vector.AsyncVectorEnv` (one process per env), both with ``autoreset_mode=SAME_STEP``.
+Gymnasium lets the registered options replace ``vector_kwargs`` given to ``make_vec``: other vector
+options go to :func:`make_vector_env`.
 
 Examples
 --------
@@ -17,8 +20,8 @@ Examples
 >>> from catenary_env.envs import register_envs
 >>> register_envs()
 >>> gym.spec("Catenary-SW2-v0").kwargs
-{'problem': 'SW2'}
->>> envs = gym.make_vec("Catenary-B1-v0", 2, fidelity="test")
+{'problem': 'SW2', 'vector_kwargs': {'autoreset_mode': 'SameStep'}}
+>>> envs = gym.make_vec("Catenary-B1-v0", 2, vectorization_mode="async", fidelity="test")
 >>> envs.metadata["autoreset_mode"]
 <AutoresetMode.SAME_STEP: 'SameStep'>
 >>> envs.close()
@@ -33,13 +36,21 @@ try:
 except ImportError as error:  # pragma: no cover - depends on the installation
     raise ImportError("the environments need gymnasium: pip install catenary-env[gym]") from error
 
+from .vector_options import VECTOR_KWARGS
+
 if TYPE_CHECKING:
     from .design_env import CatenaryDesignEnv
 
-__all__ = ["BUILTIN_PROBLEMS", "CatenaryDesignEnv", "env_ids", "make_vector_env", "register_envs"]
+__all__ = [
+    "BUILTIN_PROBLEMS",
+    "VECTOR_KWARGS",
+    "CatenaryDesignEnv",
+    "env_ids",
+    "make_vector_env",
+    "register_envs",
+]
 
 ENTRY_POINT = "catenary_env.envs.design_env:CatenaryDesignEnv"
-VECTOR_ENTRY_POINT = "catenary_env.envs:make_vector_env"
 
 BUILTIN_PROBLEMS = ("BPresag", "B1", "B2", "B3", "SWPresag", "SW1", "SW2", "SW3")
 """The eight problems of ``catenary_env.problems.PROBLEMS``, by name, so that registering their envs on
@@ -80,18 +91,20 @@ def register_envs(builtin_only: bool = False) -> None:
         env_id = f"Catenary-{name}-v0"
         if env_id not in gymnasium.registry:
             gymnasium.register(
-                id=env_id,
-                entry_point=ENTRY_POINT,
-                vector_entry_point=VECTOR_ENTRY_POINT,
-                kwargs={"problem": name},
+                id=env_id, entry_point=ENTRY_POINT, kwargs={"problem": name, "vector_kwargs": VECTOR_KWARGS}
             )
 
 
 def make_vector_env(
-    num_envs: int = 1, *, problem: str, asynchronous: bool = False, **kwargs: Any
+    num_envs: int = 1,
+    *,
+    problem: str,
+    asynchronous: bool = False,
+    vector_kwargs: dict[str, Any] | None = None,
+    **kwargs: Any,
 ) -> gymnasium.vector.VectorEnv:
-    """The vector env of ``gymnasium.make_vec("Catenary-<problem>-v0", num_envs, **kwargs)``: same-step
-    autoreset.
+    """A vector env of ``num_envs`` envs ``Catenary-<problem>-v0`` with same-step autoreset, as
+    ``gymnasium.make_vec`` makes (with ``vectorization_mode="async"`` for ``asynchronous=True``).
 
     Parameters
     ----------
@@ -102,6 +115,9 @@ def make_vector_env(
     asynchronous : bool
         One process per env (:class:`~gymnasium.vector.AsyncVectorEnv`): the simulations of a step run in
         parallel. Default: all in this process (:class:`~gymnasium.vector.SyncVectorEnv`).
+    vector_kwargs : dict, optional
+        More options of the vector env's class (``context``, ``shared_memory``, ...), over
+        :data:`VECTOR_KWARGS`: what ``gymnasium.make_vec`` cannot take for these envs.
     **kwargs
         The env's arguments (``speed_kmh``, ``speed_range``, ``fidelity``, ...), the same for every env.
 
@@ -119,7 +135,7 @@ def make_vector_env(
         return gymnasium.make(env_id, **kwargs)
 
     vector = gymnasium.vector.AsyncVectorEnv if asynchronous else gymnasium.vector.SyncVectorEnv
-    return vector([make_env] * num_envs, autoreset_mode=gymnasium.vector.AutoresetMode.SAME_STEP)
+    return vector([make_env] * num_envs, **{**VECTOR_KWARGS, **(vector_kwargs or {})})
 
 
 register_envs(builtin_only=True)  # on import, as Gymnasium 1.x expects of a third-party package

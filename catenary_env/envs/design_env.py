@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from collections import OrderedDict
 from typing import Any
@@ -14,9 +15,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..analysis.statistics import ContactStatistics
 from ..model.definition import CatenaryDefinition
-from ..model.design import Design, check_speed
+from ..model.design import Design, check_speed, physical_warnings
 from ..pipeline import Evaluation, Fidelity, en50367_mean_force
 from ..problems import DesignProblem, get_problem, resolve_fidelity
+from ..problems.calibration_cache import quiet_calibrations
+from ..problems.speeds import SpeedsEvaluation, evaluate_over_speeds
+from .vector_options import VECTOR_KWARGS
 
 OBJECTIVES = ("sigma", "mean_sigma_over_speeds", "worst_sigma_over_speeds")
 """Objective names: σ at one speed, the mean of σ over ``speeds_kmh``, the largest σ over ``speeds_kmh``."""
@@ -58,18 +62,8 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     change at dropper i (negative = lower); `d_i`: position of dropper i from the span's first support;
     dropper 1 is next to the support.
 
-    | Problem  | Catenary  | Drop. | Variables (m)     | Bounds (m)                                          |
-    |----------|-----------|-------|-------------------|-----------------------------------------------------|
-    | BPresag  | benchmark | 9     | s                 | [-0.02, 0.10]                                       |
-    | B1       | benchmark | 9     | dh_1 .. dh_5      | each [-0.02, 0.02]                                  |
-    | B2       | benchmark | 9     | d_1 .. d_4        | [0.1, 7.4], [7.5, 13.1], [13.2, 18.8], [18.9, 27.4] |
-    | B3       | benchmark | 5     | d_1, d_2, dh_1..3 | [0.1, 13.0], [13.1, 27.4]; dh [-0.02, 0.02]         |
-    | SWPresag | stitched  | 7     | s                 | [-0.02, 0.10]                                       |
-    | SW1      | stitched  | 7     | dh_1 .. dh_4      | each [-0.02, 0.02]                                  |
-    | SW2      | stitched  | 7     | d_1 .. d_3        | [0.1, 8.9], [9.1, 20.4], [20.5, 32.4]               |
-    | SW3      | stitched  | 5     | d_1, d_2, dh_1..3 | [2, 9], [10, 30]; dh [-0.02, 0.02]                  |
-
-    Drop.: droppers per span.
+    The variables and bounds of each problem: docs/problems.md, 'The eight problems' (the table
+    :func:`~catenary_env.problems.table.problem_table` writes from the problems).
 
     ## Observation Space
 
@@ -106,7 +100,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     Every episode is one step: `terminated=True` after it, `truncated=False`. Vector envs should use
     `autoreset_mode=gymnasium.vector.AutoresetMode.SAME_STEP`, so that no step is spent on a reset:
-    `gymnasium.make_vec("Catenary-B1-v0", n)` gives it.
+    `gymnasium.make_vec("Catenary-B1-v0", n)` gives it, with `vectorization_mode="async"` too.
 
     ## Info
 
@@ -119,15 +113,19 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     `max_support_uplift` in m; absent when the design was not simulated dynamically),
     `uplift_force` (N), `dropper_lengths` (m) and `dropper_forces` (N) of a central span,
     `wall_time` (s, of the simulations behind the result) and `clipped` (bool). With a multi-speed
-    objective, `speed_kmh`, the statistics and `uplift_force` are arrays over `speeds_kmh`.
+    objective, `speed_kmh`, the statistics and `uplift_force` are arrays over `speeds_kmh`; a design is
+    not simulated at the speeds after the first at which it is infeasible (the statistics are then absent,
+    `uplift_force` NaN there), as in the studies' mean-σ problem (`catenary_env.problems.speeds`).
     A design an env has already simulated (the last 1024, on the grid, at the same speed) is not
     simulated again: the step returns the stored result, `wall_time` included.
 
     ## Arguments
 
-    - `problem`: problem name, one of the table above (set by the registered ID).
-    - `speed_kmh=300.0`: train speed, km/h (unused with a multi-speed objective or `speed_range`).
-    - `speed_range=None`: `(lo, hi)` km/h to draw the speed from at each reset.
+    - `problem`: problem name, one of docs/problems.md's table (set by the registered ID).
+    - `speed_kmh=None`: train speed, km/h (default 300; not with a multi-speed objective or `speed_range`).
+    - `speed_range=None`: `(lo, hi)` km/h to draw the speed from at each reset. A speed (or range) above
+      0.9 of the wave speed is warned about, as on the command line: the wave-speed singularity dominates
+      the contact force there.
     - `n_spans=None`: spans in the section, overriding the fidelity's (the analysis section shrinks to
       `n_spans - 2` spans if needed).
     - `fidelity="study"`: `"study"` (20 spans, statistics on 10, Δt = 1 ms), `"test"` (5 spans, coarse
@@ -137,6 +135,8 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     - `normalize_reward=False`: divide the reward by the reference design's objective.
     - `render_mode=None`: or `"rgb_array"`, a picture of the last design (the reference design before
       the first step) with its statistics.
+    - `vector_kwargs`: registered for `gymnasium.make_vec` (same-step autoreset), which reads it;
+      `gymnasium.make` passes it on, and the env refuses any other value.
 
     ```python
     >>> import gymnasium as gym
@@ -158,7 +158,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     def __init__(
         self,
         problem: str,
-        speed_kmh: float = 300.0,
+        speed_kmh: float | None = None,
         speed_range: tuple[float, float] | None = None,
         n_spans: int | None = None,
         fidelity: str | Fidelity = "study",
@@ -166,7 +166,13 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         speeds_kmh: tuple[float, ...] | None = None,
         normalize_reward: bool = False,
         render_mode: str | None = None,
+        vector_kwargs: dict[str, Any] | None = None,
     ) -> None:
+        if vector_kwargs is not None and vector_kwargs != VECTOR_KWARGS:
+            raise ValueError(
+                f"vector_kwargs = {vector_kwargs!r}: an option of gymnasium.make_vec, registered as "
+                f"{VECTOR_KWARGS!r}; a design env takes no other"
+            )
         self.problem: DesignProblem = get_problem(problem)
         self.fidelity: Fidelity = resolve_fidelity(fidelity, n_spans)
         self.objective = objective
@@ -200,7 +206,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             if self.objective != "sigma":
                 raise ValueError("options['speed_kmh'] is only for objective='sigma'")
             speed = float(options["speed_kmh"])
-            check_speed(self.problem.catenary_definition, speed / 3.6)
+            _check_speed(self.problem.catenary_definition, speed)
             self._speeds = (speed,)
         elif self._speed_range is not None:
             lo, hi = math.ceil(self._speed_range[0]), math.floor(self._speed_range[1])
@@ -211,16 +217,18 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     def step(self, action: ArrayLike) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         if self._speed_range is not None and not self._reset_done:
             raise gym.error.ResetNeeded("call reset() first: it draws the speed from speed_range")
-        values = self._check_action(action)
+        values = self.problem.grid.check_vector(action, "action")
         clipped = bool(np.any(values < -1.0) or np.any(values > 1.0))
         x = self.action_to_x(values)
-        evaluations = self._evaluate(x)
-        objective, feasible = self._objective(evaluations)
-        reward = -objective / self._reference_objective() if self.normalize_reward else -objective
+        with quiet_calibrations():  # a training loop meets many speeds: no two lines on stderr for each
+            result = evaluate_over_speeds(functools.partial(self._evaluate, x), self._speeds)
+            objective = self._objective(result)
+            reward = -objective / self._reference_objective() if self.normalize_reward else -objective
         design = self.problem.design(x)
-        info = self._info(x, design, evaluations, objective, feasible, clipped)
+        info = self._info(x, design, result, objective, clipped)
         self._last = (design, f"{self.problem.name} design at {self._speed_text()}", self._summary(info))
-        self._last_trace = (evaluations[0].trace_position, evaluations[0].trace_force)
+        first = result.evaluations[0]
+        self._last_trace = (first.trace_position, first.trace_force)
         return self._observation(), float(reward), True, False, info
 
     def render(self) -> NDArray[np.uint8] | None:
@@ -250,82 +258,51 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     # -- helpers ------------------------------------------------------------------------------------------
 
-    def _check_action(self, action: ArrayLike) -> NDArray[np.float64]:
-        try:
-            values = np.asarray(action, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ValueError(
-                f"action must be an array of {self.problem.n_variables} numbers, got {action!r}"
-            ) from None
-        if values.shape != self.action_space.shape:
-            raise ValueError(
-                f"action must have shape {self.action_space.shape} ({', '.join(self.problem.variables)}), "
-                f"got shape {values.shape}"
-            )
-        if not np.all(np.isfinite(values)):
-            raise ValueError(f"action must be finite (no NaN or inf), got {values.tolist()}")
-        return values
+    def _evaluate(self, x: NDArray[np.float64], speed: float) -> Evaluation:
+        key = (tuple(x.tolist()), speed)
+        if key in self._memo:
+            self._memo.move_to_end(key)
+            return self._memo[key]
+        evaluation = self.problem.evaluate(x, speed, self.fidelity)
+        self.evaluation_count += 1
+        self._memo[key] = evaluation
+        if len(self._memo) > MEMO_SIZE:
+            self._memo.popitem(last=False)
+        return evaluation
 
-    def _evaluate(self, x: NDArray[np.float64]) -> list[Evaluation]:
-        evaluations: list[Evaluation] = []
-        for speed in self._speeds:
-            key = (tuple(x.tolist()), speed)
-            if key in self._memo:
-                self._memo.move_to_end(key)
-                evaluation = self._memo[key]
-            else:
-                evaluation = self.problem.evaluate(x, speed, self.fidelity)
-                self.evaluation_count += 1
-                self._memo[key] = evaluation
-                if len(self._memo) > MEMO_SIZE:
-                    self._memo.popitem(last=False)
-            evaluations.append(evaluation)
-            if evaluation.statistics is None:
-                break  # statically infeasible: the statics do not depend on the speed
-        return evaluations
-
-    def _aggregate(self, values: list[float]) -> float:
-        if self.objective == "worst_sigma_over_speeds":
-            return float(np.max(values))
-        return float(np.mean(values))  # one speed, or the mean over speeds
-
-    def _objective(self, evaluations: list[Evaluation]) -> tuple[float, bool]:
-        feasible = len(evaluations) == len(self._speeds) and all(e.feasible for e in evaluations)
-        if feasible:
-            return self._aggregate([e.statistics.std for e in evaluations if e.statistics is not None]), True
+    def _objective(self, result: SpeedsEvaluation) -> float:
+        worst = self.objective == "worst_sigma_over_speeds"
+        sigma = result.sigma(worst)
+        if sigma is not None:
+            return sigma
         penalty = [INFEASIBLE_SIGMA_OVER_MEAN * en50367_mean_force(v / 3.6) for v in self._speeds]
-        return self._aggregate(penalty), False
+        return float(np.max(penalty) if worst else np.mean(penalty))
 
     def _reference_objective(self) -> float:
-        sigmas = []
-        for speed in self._speeds:
-            reference = self.problem.reference_evaluation(speed, self.fidelity)
-            if not reference.feasible or reference.statistics is None:
-                raise RuntimeError(
-                    f"reward normalisation: the reference design of {self.problem.name} is infeasible "
-                    f"at {speed} km/h ({reference.reason})"
-                )
-            sigmas.append(reference.statistics.std)
-        return self._aggregate(sigmas)
+        reference = evaluate_over_speeds(
+            functools.partial(self.problem.reference_evaluation, fidelity=self.fidelity), self._speeds
+        )
+        sigma = reference.sigma(self.objective == "worst_sigma_over_speeds")
+        if sigma is None:
+            raise RuntimeError(
+                f"reward normalisation: the reference design of {self.problem.name} is infeasible "
+                f"({reference.reason})"
+            )
+        return sigma
 
     def _info(
         self,
         x: NDArray[np.float64],
         design: Design,
-        evaluations: list[Evaluation],
+        result: SpeedsEvaluation,
         objective: float,
-        feasible: bool,
         clipped: bool,
     ) -> dict[str, Any]:
         single = len(self._speeds) == 1
-        reasons = [
-            e.reason if single else f"at {v:g} km/h: {e.reason}"
-            for v, e in zip(self._speeds, evaluations, strict=False)
-            if not e.feasible
-        ]
+        evaluations = result.evaluations
         info: dict[str, Any] = {
-            "feasible": feasible,
-            "reason": "; ".join(reasons),
+            "feasible": result.feasible,
+            "reason": result.reason,
             "variables": dict(zip(self.problem.variables, x.tolist(), strict=True)),
             "design": design,
             "speed_kmh": self._speed_info(),
@@ -342,7 +319,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         )
         info["dropper_lengths"] = tuple(evaluations[0].dropper_lengths)
         info["dropper_forces"] = tuple(evaluations[0].dropper_forces)
-        info["wall_time"] = float(sum(e.wall_time for e in evaluations))
+        info["wall_time"] = result.wall_time
         info["clipped"] = clipped
         return info
 
@@ -367,9 +344,13 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         return ", ".join(f"{v:g}" for v in self._speeds) + " km/h"
 
 
+DEFAULT_SPEED_KMH = 300.0
+"""The train speed of an env given no speed, km/h."""
+
+
 def _speed_setting(
     catenary: CatenaryDefinition,
-    speed_kmh: float,
+    speed_kmh: float | None,
     speed_range: tuple[float, float] | None,
     objective: str,
     speeds_kmh: tuple[float, ...] | None,
@@ -377,9 +358,16 @@ def _speed_setting(
     """Check the speed arguments; return the speeds of the first episode (km/h) and the range, if any."""
     if objective not in OBJECTIVES:
         raise ValueError(f"objective = {objective!r}: must be one of {', '.join(OBJECTIVES)}")
+    if speed_kmh is not None and speed_range is not None:
+        raise ValueError(
+            f"speed_kmh = {speed_kmh!r} and speed_range = {speed_range!r}: give one, the speed or the range "
+            "drawn from at each reset"
+        )
     if objective != "sigma":
         if speed_range is not None:
             raise ValueError(f"speed_range cannot be combined with objective={objective!r}; give speeds_kmh")
+        if speed_kmh is not None:
+            raise ValueError(f"speed_kmh cannot be combined with objective={objective!r}; give speeds_kmh")
         if not speeds_kmh:
             raise ValueError(f"objective={objective!r} needs speeds_kmh, a tuple of speeds in km/h")
         speeds = tuple(float(v) for v in speeds_kmh)
@@ -388,7 +376,7 @@ def _speed_setting(
     elif speeds_kmh is not None:
         raise ValueError("speeds_kmh is for the multi-speed objectives; use speed_kmh or speed_range")
     elif speed_range is None:
-        speeds = checked = (float(speed_kmh),)
+        speeds = checked = (DEFAULT_SPEED_KMH if speed_kmh is None else float(speed_kmh),)
         bounds = None
     else:
         lo, hi = (float(v) for v in speed_range)
@@ -397,5 +385,13 @@ def _speed_setting(
         bounds = (lo, hi)
         checked, speeds = bounds, (float(math.ceil(lo)),)  # reset() draws the episode's speed
     for v in checked:
-        check_speed(catenary, v / 3.6)  # DesignError (a ValueError) naming the allowed range
+        _check_speed(catenary, v)
     return speeds, bounds
+
+
+def _check_speed(catenary: CatenaryDefinition, speed_kmh: float) -> None:
+    """Refuse a speed outside (0, wave speed) (a DesignError, a ValueError, naming the allowed range); warn
+    about one near the wave speed, as the command line does."""
+    check_speed(catenary, speed_kmh / 3.6)
+    for warning in physical_warnings(catenary, speed_kmh / 3.6, None):
+        gym.logger.warn(warning)

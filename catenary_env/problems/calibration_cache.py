@@ -24,6 +24,7 @@ so). Default: ``$XDG_CACHE_HOME/catenary-env``, else ``~/.cache/catenary-env``.
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import dataclasses
 import functools
 import hashlib
@@ -42,7 +43,7 @@ from .. import pipeline
 from ..model.definition import CatenaryDefinition, PantographDefinition
 from ..model.design import Design
 
-__all__ = ["CACHE_ENV", "CacheWarning", "cache_file", "cache_folder", "cached_uplift"]
+__all__ = ["CACHE_ENV", "CacheWarning", "cache_file", "cache_folder", "cached_uplift", "quiet_calibrations"]
 
 CACHE_ENV = "CATENARY_ENV_CACHE"
 """Environment variable: the cache folder, or ``off`` to keep no cache on disk."""
@@ -53,6 +54,20 @@ FORMAT = 1
 
 SIMULATOR_PARTS = ("model", "fem", "statics", "dynamics", "analysis", "pipeline.py")
 """The parts of the package whose source decides a calibration's result."""
+
+
+_ANNOUNCE = contextvars.ContextVar("catenary_env_announce_calibrations", default=True)
+
+
+@contextlib.contextmanager
+def quiet_calibrations() -> Iterator[None]:
+    """Announce no calibration on stderr within the block (the design envs step in it: a training loop
+    meets many speeds, each with its calibration)."""
+    token = _ANNOUNCE.set(False)
+    try:
+        yield
+    finally:
+        _ANNOUNCE.reset(token)
 
 
 class CacheWarning(UserWarning):
@@ -136,13 +151,15 @@ def cached_uplift(
     target_mean : float
         Mean contact force to reach, N.
     announce : bool
-        Say on stderr when the calibration runs, and how long it took.
+        Say on stderr when the calibration runs, and how long it took (not within
+        :func:`quiet_calibrations`).
 
     Returns
     -------
     float
         Uplift force, N.
     """
+    announce = announce and _ANNOUNCE.get()
     key = calibration_key(catenary, pantograph, design, speed_kmh, fidelity, target_mean)
     path = cache_file()
     if path is not None:

@@ -319,21 +319,7 @@ class DesignProblem:
     # -- helpers ----------------------------------------------------------------------------------------
 
     def _as_vector(self, x: ArrayLike) -> NDArray[np.float64]:
-        try:
-            values = np.asarray(x, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ValueError(
-                f"problem {self.name}: x must be {self.n_variables} numbers "
-                f"({', '.join(self.variables)}), got {x!r}"
-            ) from None
-        if values.shape != (self.n_variables,):
-            raise ValueError(
-                f"problem {self.name}: x must have shape ({self.n_variables},) "
-                f"({', '.join(self.variables)}), got shape {values.shape}"
-            )
-        if not np.all(np.isfinite(values)):
-            raise ValueError(f"problem {self.name}: x must be finite, got {values.tolist()}")
-        return values
+        return self.grid.check_vector(x, "x")
 
     def _split_names(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
         positions = tuple(v for v in self.variables if v.startswith("d_"))

@@ -94,6 +94,28 @@ class DesignGrid:
         """Grid points of each variable, bounds included."""
         return np.round((self.upper - self.lower) / self.step).astype(np.int64) + 1
 
+    def check_vector(self, values: ArrayLike, what: str = "x") -> NDArray[np.float64]:
+        """``values`` as one finite number per variable (a design ``x`` in m, or an env's action), or a
+        ValueError naming ``what``, the problem and its variables.
+
+        The one check of a design input: the problems' ``x`` and the environments' actions pass it.
+        """
+        names = ", ".join(self.variable_names)
+        try:
+            array = np.asarray(values, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"problem {self.name}: {what} must be {self.n_variables} numbers ({names}), got {values!r}"
+            ) from None
+        if array.shape != (self.n_variables,):
+            raise ValueError(
+                f"problem {self.name}: {what} must have shape ({self.n_variables},) ({names}), "
+                f"got shape {array.shape}"
+            )
+        if not np.all(np.isfinite(array)):
+            raise ValueError(f"problem {self.name}: {what} must be finite (no NaN or inf): {array.tolist()}")
+        return array
+
     def to_index(self, x: ArrayLike) -> NDArray[np.int64]:
         """Integer grid coordinates of ``x``: clipped to the bounds, rounded to the nearest point.
 
