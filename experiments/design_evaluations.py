@@ -22,19 +22,22 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from catenary_env.problems import evaluate_problem
+from catenary_env.problems import evaluate_problem, get_problem
 from optimizers.base import EvaluationRecord
-from optimizers.catenary_adapter import catenary_problem, simulate_catenary_design
+from optimizers.catenary_adapter import catenary_problem
 from optimizers.evaluation import make_backend
 from optimizers.problem import GridSpace, Outcome, SimulateFunction
+from optimizers.problem_registry import resolve_problem
 from optimizers.recorder import package_version
 from optimizers.store import RunConfig, RunStore
+from optimizers.synthetic import SYNTHETIC_PROBLEMS
 
 __all__ = [
     "GIVEN_DESIGNS",
     "MeanSigmaProblem",
     "evaluate_designs",
     "mean_sigma_problem",
+    "reference_design",
     "simulate_mean_sigma",
 ]
 
@@ -56,7 +59,8 @@ def evaluate_designs(
     store : RunStore
         Its cache is read; the new simulations are written to it.
     problem : str
-        A catenary design problem (docs/problems.md, 'The eight problems').
+        A catenary design problem (docs/problems.md, 'The eight problems') or a synthetic one
+        (``optimizers/synthetic.py``).
     requests : sequence of (x, speed_kmh)
         Designs (variables, m, on the grid) and the speed of each, km/h.
     fidelity : str
@@ -69,7 +73,8 @@ def evaluate_designs(
     list of Outcome
         In the order of ``requests``.
     """
-    space = GridSpace.from_problem(catenary_problem(problem))
+    resolved = resolve_problem(problem)
+    space = GridSpace.from_problem(resolved)
     outcomes: dict[int, Outcome] = {}
     missing: dict[tuple[tuple[int, ...], float], list[int]] = {}
     for position, (x, speed) in enumerate(requests):
@@ -87,9 +92,8 @@ def evaluate_designs(
         index = store.count_evaluations(run_id)
         keys = list(missing)
         arguments = [(tuple(space.snap(requests[missing[k][0]][0]).tolist()), k[1], fidelity) for k in keys]
-        simulate = functools.partial(simulate_catenary_design, problem)
         with make_backend(n_workers) as backend:
-            for number, outcome in backend.run(simulate, arguments):
+            for number, outcome in backend.run(resolved.simulate, arguments):
                 x, speed, _ = arguments[number]
                 record = EvaluationRecord(
                     index, x, outcome.feasible, outcome.sigma, outcome.reason, outcome.wall_time,
@@ -100,6 +104,14 @@ def evaluate_designs(
                 for position in missing[keys[number]]:
                     outcomes[position] = outcome
     return [outcomes[position] for position in range(len(requests))]
+
+
+def reference_design(problem: str) -> NDArray[np.float64] | None:
+    """The reference design of a problem, m: a catalogue problem's (None where its variables cannot express
+    it, B3 and SW3), or a synthetic problem's (``optimizers/synthetic.py``)."""
+    if problem in SYNTHETIC_PROBLEMS:
+        return SYNTHETIC_PROBLEMS[problem].reference_x()
+    return get_problem(problem).reference_x()
 
 
 def simulate_mean_sigma(
