@@ -1,5 +1,5 @@
 """Studies re-plot from their data files alone (docs/problems.md, 'Experiments'): no simulation in
-``report``."""
+``report``. The real quick studies run behind the ``slow`` marker (``python -m pytest -m slow``)."""
 
 from __future__ import annotations
 
