@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from catenary_env.problems import evaluate_problem, get_problem
+from catenary_env.problems.design_problem import DesignProblem
 from optimizers.base import EvaluationRecord
 from optimizers.catenary_adapter import catenary_problem
 from optimizers.evaluation import make_backend
@@ -30,15 +31,15 @@ from optimizers.problem import GridSpace, Outcome, SimulateFunction
 from optimizers.problem_registry import resolve_problem
 from optimizers.recorder import package_version
 from optimizers.store import RunConfig, RunStore
-from optimizers.synthetic import SYNTHETIC_PROBLEMS
+from optimizers.synthetic import SYNTHETIC_PROBLEMS, QuadraticProblem
 
 __all__ = [
     "GIVEN_DESIGNS",
     "MeanSigmaProblem",
     "evaluate_designs",
     "mean_sigma_problem",
-    "reference_design",
     "simulate_mean_sigma",
+    "study_problem",
 ]
 
 GIVEN_DESIGNS = "given-designs"
@@ -106,12 +107,11 @@ def evaluate_designs(
     return [outcomes[position] for position in range(len(requests))]
 
 
-def reference_design(problem: str) -> NDArray[np.float64] | None:
-    """The reference design of a problem, m: a catalogue problem's (None where its variables cannot express
-    it, B3 and SW3), or a synthetic problem's (``optimizers/synthetic.py``)."""
-    if problem in SYNTHETIC_PROBLEMS:
-        return SYNTHETIC_PROBLEMS[problem].reference_x()
-    return get_problem(problem).reference_x()
+def study_problem(problem: str) -> DesignProblem | QuadraticProblem:
+    """A problem by name, as the studies read it (its ``reference_x()``, its ``n_variables``; no model
+    fingerprint, so that a report reads it without simulating): a synthetic problem
+    (``optimizers/synthetic.py``), else a catalogue one (docs/problems.md, 'The eight problems')."""
+    return SYNTHETIC_PROBLEMS[problem] if problem in SYNTHETIC_PROBLEMS else get_problem(problem)
 
 
 def simulate_mean_sigma(

@@ -57,7 +57,7 @@ from optimizers.store import RunStore
 from optimizers.synthetic import SYNTHETIC_PROBLEMS
 
 from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, run_cli, study_dir, worker_count, write_csv
-from .design_evaluations import evaluate_designs, reference_design
+from .design_evaluations import evaluate_designs, study_problem
 from .iohprofiler import runs_from_rows, write_algorithm
 from .rl_studies import policy_options, train_policy
 
@@ -128,7 +128,7 @@ def main(config: Config) -> Path:
     reference_rows: list[dict[str, Any]] = []
     with RunStore(store_path) as store:
         for problem in config.problems:
-            reference = reference_design(problem)
+            reference = study_problem(problem).reference_x()
             (outcome,) = evaluate_designs(
                 store, problem, [(reference, SPEED_KMH)], config.fidelity, config.workers
             )
@@ -420,7 +420,7 @@ def _write_ioh(root: Path, evaluations: list[dict[str, Any]], runs: list[dict[st
     function_ids = {name: number for number, name in enumerate([*DESIGN_PROBLEMS, *SYNTHETIC_PROBLEMS], 1)}
     done = [r for r in runs if r["status"] == "done"]
     for problem in dict.fromkeys(r["problem"] for r in done):
-        dimension = len(resolve_problem(problem).variable_names)
+        dimension = study_problem(problem).n_variables
         for optimizer in dict.fromkeys(r["optimizer"] for r in done if r["problem"] == problem):
             chosen = [r for r in done if r["problem"] == problem and r["optimizer"] == optimizer]
             ids = {int(r["run"]) for r in chosen}
