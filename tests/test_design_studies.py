@@ -45,7 +45,7 @@ def test_convergence_rows_carry_the_elite():
         (1, ("SW3",)),
         # The real quick study: one problem of each catenary, one of heights only, with the spawned
         # worker processes of `python -m experiments.design_studies` (each importing, compiling and
-        # calibrating on its own); 40 s.
+        # calibrating on its own); tens of seconds.
         pytest.param((2, ("B1", "SW3")), marks=pytest.mark.slow),
     ],
     ids=["SW3-in-process", "B1-SW3-two-workers"],
