@@ -22,14 +22,17 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from catenary_env.problems import evaluate_problem
+from catenary_env.problems import evaluate_problem, get_problem
+from catenary_env.problems.design_problem import DesignProblem
 from catenary_env.problems.speeds import evaluate_over_speeds
 from optimizers.base import EvaluationRecord
-from optimizers.catenary_adapter import catenary_problem, simulate_catenary_design
+from optimizers.catenary_adapter import catenary_problem
 from optimizers.evaluation import make_backend
 from optimizers.problem import GridSpace, Outcome, SimulateFunction
+from optimizers.problem_registry import resolve_problem
 from optimizers.recorder import package_version
 from optimizers.store import RunConfig, RunStore
+from optimizers.synthetic import SYNTHETIC_PROBLEMS, QuadraticProblem
 
 __all__ = [
     "GIVEN_DESIGNS",
@@ -37,6 +40,7 @@ __all__ = [
     "evaluate_designs",
     "mean_sigma_problem",
     "simulate_mean_sigma",
+    "study_problem",
 ]
 
 GIVEN_DESIGNS = "given-designs"
@@ -57,7 +61,8 @@ def evaluate_designs(
     store : RunStore
         Its cache is read; the new simulations are written to it.
     problem : str
-        A catenary design problem (docs/problems.md, 'The eight problems').
+        A catenary design problem (docs/problems.md, 'The eight problems') or a synthetic one
+        (``optimizers/synthetic.py``).
     requests : sequence of (x, speed_kmh)
         Designs (variables, m, on the grid) and the speed of each, km/h.
     fidelity : str
@@ -70,7 +75,8 @@ def evaluate_designs(
     list of Outcome
         In the order of ``requests``.
     """
-    space = GridSpace.from_problem(catenary_problem(problem))
+    resolved = resolve_problem(problem)
+    space = GridSpace.from_problem(resolved)
     outcomes: dict[int, Outcome] = {}
     missing: dict[tuple[tuple[int, ...], float], list[int]] = {}
     for position, (x, speed) in enumerate(requests):
@@ -88,9 +94,8 @@ def evaluate_designs(
         index = store.count_evaluations(run_id)
         keys = list(missing)
         arguments = [(tuple(space.snap(requests[missing[k][0]][0]).tolist()), k[1], fidelity) for k in keys]
-        simulate = functools.partial(simulate_catenary_design, problem)
         with make_backend(n_workers) as backend:
-            for number, outcome in backend.run(simulate, arguments):
+            for number, outcome in backend.run(resolved.simulate, arguments):
                 x, speed, _ = arguments[number]
                 record = EvaluationRecord(
                     index, x, outcome.feasible, outcome.sigma, outcome.reason, outcome.wall_time,
@@ -101,6 +106,13 @@ def evaluate_designs(
                 for position in missing[keys[number]]:
                     outcomes[position] = outcome
     return [outcomes[position] for position in range(len(requests))]
+
+
+def study_problem(problem: str) -> DesignProblem | QuadraticProblem:
+    """A problem by name, as the studies read it (its ``reference_x()``, its ``n_variables``; no model
+    fingerprint, so that a report reads it without simulating): a synthetic problem
+    (``optimizers/synthetic.py``), else a catalogue one (docs/problems.md, 'The eight problems')."""
+    return SYNTHETIC_PROBLEMS[problem] if problem in SYNTHETIC_PROBLEMS else get_problem(problem)
 
 
 def simulate_mean_sigma(

@@ -21,7 +21,8 @@ What is mapped how:
   last line carries the last evaluation's σ, or the best σ so far where that evaluation was infeasible
   (the same curve of best-so-far values, which is what IOHanalyzer reads); a run with no feasible design
   is left out, as the logger leaves out a run that never improved;
-- *function id* = the problem's place in ``catenary_env.problems.PROBLEMS`` from 1 (B1 is 2, SW1 is 6);
+- *function id* = the problem's place in ``catenary_env.problems.PROBLEMS`` from 1 (B1 is 2, SW1 is 6; the
+  synthetic problems of ``optimizers/synthetic.py`` follow them);
   *instance* = 1 for every run (the problem has no random instances); the seed is a run attribute.
 
 Examples

@@ -47,17 +47,17 @@ from typing import Any
 import numpy as np
 
 from catenary_env.problems import PROBLEMS as DESIGN_PROBLEMS
-from catenary_env.problems import get_problem
 from optimizers.base import OptimizationResult, get_optimizer
-from optimizers.catenary_adapter import catenary_problem
 from optimizers.ga import GAOptions
 from optimizers.nevergrad_adapters import NevergradOptions, ngopt_fault
 from optimizers.problem import GridSpace
+from optimizers.problem_registry import resolve_problem
 from optimizers.runner import optimize
 from optimizers.store import RunStore
+from optimizers.synthetic import SYNTHETIC_PROBLEMS
 
 from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, run_cli, study_dir, worker_count, write_csv
-from .design_evaluations import evaluate_designs
+from .design_evaluations import evaluate_designs, study_problem
 from .iohprofiler import runs_from_rows, write_algorithm
 from .rl_studies import policy_options, train_policy
 
@@ -84,7 +84,8 @@ class Config:
     store : Path or None
         The run store; default ``out/runs.sqlite``, shared by the studies.
     problems : tuple of str
-        The design problems compared.
+        The design problems compared; a synthetic problem (``optimizers/synthetic.py``) runs the study's
+        machinery in microseconds an evaluation, with every optimiser but PPO (which needs a design env).
     optimizers : tuple of str
         The optimisers run (default all of :data:`OPTIMIZERS`). Two processes given disjoint sets share
         the work of one problem on two cores; the combined results come from one more run over all of
@@ -127,7 +128,7 @@ def main(config: Config) -> Path:
     reference_rows: list[dict[str, Any]] = []
     with RunStore(store_path) as store:
         for problem in config.problems:
-            reference = get_problem(problem).reference_x()
+            reference = study_problem(problem).reference_x()
             (outcome,) = evaluate_designs(
                 store, problem, [(reference, SPEED_KMH)], config.fidelity, config.workers
             )
@@ -167,7 +168,7 @@ def _run(
             quiet=not config.full,
         )  # fmt: skip
         return result, "PPO, spread 4 mm around the reference design"
-    space = GridSpace.from_problem(catenary_problem(problem))
+    space = GridSpace.from_problem(resolve_problem(problem))
     spec = get_optimizer(optimizer)
     try:  # built once before the run, so that an optimiser that cannot run leaves no run in the store
         engine = spec.optimizer_class(space, config.budget, seed, options)  # type: ignore[call-arg]
@@ -191,7 +192,7 @@ def _run(
 def _evaluation_rows(store: RunStore, result: OptimizationResult, problem: str) -> list[dict[str, Any]]:
     """The tidy rows of a run's evaluations (``result.problem`` is the store's key: the name and the
     model's fingerprint)."""
-    space = GridSpace.from_problem(catenary_problem(problem))
+    space = GridSpace.from_problem(resolve_problem(problem))
     rows = []
     simulation = 0
     for record in result.history:
@@ -415,10 +416,11 @@ def _figure(curves: dict[str, dict[str, np.ndarray]], reference: dict[str, float
 
 
 def _write_ioh(root: Path, evaluations: list[dict[str, Any]], runs: list[dict[str, Any]]) -> None:
-    function_ids = {name: number for number, name in enumerate(DESIGN_PROBLEMS, start=1)}
+    # IOHprofiler's function id: the problem's place in the catalogue, the synthetic problems after it
+    function_ids = {name: number for number, name in enumerate([*DESIGN_PROBLEMS, *SYNTHETIC_PROBLEMS], 1)}
     done = [r for r in runs if r["status"] == "done"]
     for problem in dict.fromkeys(r["problem"] for r in done):
-        dimension = get_problem(problem).n_variables
+        dimension = study_problem(problem).n_variables
         for optimizer in dict.fromkeys(r["optimizer"] for r in done if r["problem"] == problem):
             chosen = [r for r in done if r["problem"] == problem and r["optimizer"] == optimizer]
             ids = {int(r["run"]) for r in chosen}

@@ -89,6 +89,14 @@ class QuadraticProblem:
         """Whether designs ``x`` (shape (..., n)) meet the constraint (1e-12 m of rounding allowed)."""
         return np.asarray(x) @ self.constraint <= self.limit + 1e-12
 
+    @property
+    def n_variables(self) -> int:
+        return len(self.variable_names)
+
+    def reference_x(self) -> NDArray[np.float64]:
+        """The design the studies compare against, m: every variable 0 (the level wire, as B1's)."""
+        return np.zeros(self.n_variables)
+
     def grid_optimum(self) -> tuple[NDArray[np.float64], float]:
         """The best feasible design on the grid and its σ, by enumeration (small grids only)."""
         grid = DesignGrid(self.name, self.variable_names, self.lower, self.upper, self.step)

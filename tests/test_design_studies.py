@@ -3,6 +3,7 @@ from the run store and the result log, and their report from the data files alon
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -13,8 +14,6 @@ pytest.importorskip("matplotlib", reason="the studies' figures need matplotlib")
 from experiments import design_studies  # noqa: E402
 from experiments.common import read_csv  # noqa: E402
 
-# One problem of each catenary, one of heights only and one that also moves and removes droppers.
-PROBLEMS = ("B1", "SW3")
 FILES = ("history.csv", "convergence.csv", "geometry.csv", "droppers.csv", "stiffness.csv", "speed.csv")
 
 
@@ -37,10 +36,24 @@ def test_convergence_rows_carry_the_elite():
     assert [design_studies.generation_of(i, 4, 2) for i in range(8)] == [0, 0, 0, 0, 1, 1, 2, 2]
 
 
-@pytest.fixture(scope="module")
-def quick_study(tmp_path_factory):
+@pytest.fixture(
+    scope="module",
+    params=[
+        # In every run: SW3 (it moves and removes droppers, and its reference design is not in its
+        # variables) with one worker, the GA simulating in this process; seconds. A design study has no
+        # synthetic stand-in: its statics and speed sweeps need a catenary.
+        (1, ("SW3",)),
+        # The real quick study: one problem of each catenary, one of heights only, with the spawned
+        # worker processes of `python -m experiments.design_studies` (each importing, compiling and
+        # calibrating on its own); tens of seconds.
+        pytest.param((2, ("B1", "SW3")), marks=pytest.mark.slow),
+    ],
+    ids=["SW3-in-process", "B1-SW3-two-workers"],
+)
+def quick_study(request, tmp_path_factory):
+    workers, problems = request.param
     out = tmp_path_factory.mktemp("results")
-    config = design_studies.Config(full=False, out=out, problems=PROBLEMS)
+    config = design_studies.Config(full=False, out=out, problems=problems, workers=workers)
     return config, design_studies.main(config)
 
 
@@ -48,7 +61,7 @@ def test_quick_study_writes_every_file(quick_study):
     config, folder = quick_study
     for name in ("design.md", "speed.png", "convergence.png"):
         assert (folder / name).stat().st_size > 0
-    for problem in PROBLEMS:
+    for problem in config.problems:
         sub = folder / problem
         for name in FILES:
             assert read_csv(sub / name), f"{problem}/{name} is empty"
@@ -69,7 +82,7 @@ def test_quick_study_writes_every_file(quick_study):
 
 def test_quick_study_resumes_without_simulating(quick_study, monkeypatch):
     config, folder = quick_study
-    before = {p: (folder / p / "history.csv").read_text() for p in PROBLEMS}
+    before = {p: (folder / p / "history.csv").read_text() for p in config.problems}
     log_lines = (folder / "log.jsonl").read_text().count("\n")
 
     def no_simulation(*args, **kwargs):
@@ -78,22 +91,24 @@ def test_quick_study_resumes_without_simulating(quick_study, monkeypatch):
     monkeypatch.setattr("optimizers.catenary_adapter.simulate_catenary_design", no_simulation)
     monkeypatch.setattr(design_studies, "_evaluate_group", no_simulation)
     monkeypatch.setattr(design_studies, "_static_data", no_simulation)
-    design_studies.main(design_studies.Config(full=False, out=config.out, problems=PROBLEMS, workers=1))
-    assert {p: (folder / p / "history.csv").read_text() for p in PROBLEMS} == before
+    design_studies.main(dataclasses.replace(config, workers=1))
+    assert {p: (folder / p / "history.csv").read_text() for p in config.problems} == before
     assert (folder / "log.jsonl").read_text().count("\n") == log_lines
 
 
 def test_report_needs_only_the_data(quick_study, monkeypatch):
-    _, folder = quick_study
+    config, folder = quick_study
     for png in folder.rglob("*.png"):
         png.unlink()
     monkeypatch.setattr(design_studies, "optimize", None)
     monkeypatch.setattr(design_studies, "get_problem", None)
     text = design_studies.report(folder)
-    assert "| B1 |" in text and "| SW3 |" in text and "α ref. 100 N" in text
-    forces = [r["force_N"] for r in read_csv(folder / "B1" / "droppers.csv") if r["design"] == "reference"]
-    assert f"| B1 | reference | {', '.join(f'{f:.1f}' for f in forces)} |" in text  # static dropper forces
-    assert (folder / "speed.png").exists() and (folder / "SW3" / "design.png").exists()
+    assert "α ref. 100 N" in text and (folder / "speed.png").exists()
+    for problem in config.problems:
+        droppers = read_csv(folder / problem / "droppers.csv")
+        forces = ", ".join(f"{r['force_N']:.1f}" for r in droppers if r["design"] == "reference")
+        assert f"| {problem} | reference | {forces} |" in text  # static dropper forces
+        assert (folder / problem / "design.png").exists()
 
 
 def test_catenary_report_gathers_the_studies(quick_study, capsys):

@@ -1,17 +1,18 @@
-"""Studies 4 and 5 (docs/problems.md, 'Experiments') end to end in their quick setting: the files they write,
-their re-making from the data alone, and their resumption from the run store without simulating again.
+"""Studies 4 and 5 (docs/problems.md, 'Experiments') end to end: the files they write, their re-making from
+the data alone, and their resumption from the run store without simulating again.
 
-The quick settings simulate on the "test" fidelity with budgets of about ten simulations: a smoke test of
-the machinery, not of the results.
+The optimiser comparison runs on the synthetic problem (optimizers/synthetic.py) in every run; the real
+quick settings (the "test" fidelity, budgets of about ten simulations, PPO) are behind the ``slow`` marker
+(``python -m pytest -m slow``): a smoke test of the machinery, not of the results.
 """
 
 from __future__ import annotations
 
 import json
 import shutil
-import subprocess
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 pytest.importorskip("matplotlib", reason="the studies' figures need matplotlib")
@@ -23,6 +24,10 @@ from catenary_env.problems.design_problem import DesignProblem  # noqa: E402
 from experiments import optimizer_comparison, rl_studies  # noqa: E402
 from experiments.common import read_csv  # noqa: E402
 from experiments.iohprofiler import IOHRun, improvement_lines, read_dat  # noqa: E402
+from optimizers import synthetic  # noqa: E402
+from optimizers.synthetic import get_synthetic_problem  # noqa: E402
+
+SYNTHETIC = "synthetic-quadratic"
 
 
 def _columns(path: Path) -> list[str]:
@@ -30,12 +35,14 @@ def _columns(path: Path) -> list[str]:
 
 
 def _no_simulation(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Make any simulation of a design fail the test (calibrations of the uplift are not designs)."""
+    """Make any simulation of a design, catenary or synthetic, fail the test (calibrations of the uplift
+    are not designs)."""
 
     def refuse(*args, **kwargs):
         raise AssertionError("a design was simulated")
 
     monkeypatch.setattr(DesignProblem, "evaluate", refuse)
+    monkeypatch.setattr(synthetic, "simulate_quadratic", refuse)
 
 
 def _remake_from_data(folder: Path, tmp_path: Path, module, outputs: list[str]) -> Path:
@@ -71,8 +78,9 @@ def _check_ioh(root: Path, problems: tuple[str, ...], budget: int) -> int:
     return n_runs
 
 
-def test_optimizer_comparison_quick(tmp_path, monkeypatch):
-    config = optimizer_comparison.Config(out=tmp_path)
+def _check_comparison(config: optimizer_comparison.Config, tmp_path: Path, monkeypatch) -> None:
+    """Run the comparison and check what it writes, its re-making from the data alone and its replay from
+    the run store without simulating."""
     folder = optimizer_comparison.main(config)
     assert folder == tmp_path / "optimizers"
     assert _columns(folder / "evaluations.csv") == [
@@ -80,8 +88,7 @@ def test_optimizer_comparison_quick(tmp_path, monkeypatch):
         "cached", "wall_time_s", "simulation_time_s", "x_m",
     ]  # fmt: skip
     runs = read_csv(folder / "runs.csv")
-    expected = len(config.problems) * len(optimizer_comparison.OPTIMIZERS) * len(config.seeds)
-    assert len(runs) == expected
+    assert len(runs) == len(config.problems) * len(config.optimizers) * len(config.seeds)
     for run in runs:
         if run["status"] == "done":
             assert run["n_simulations"] <= config.budget
@@ -89,7 +96,7 @@ def test_optimizer_comparison_quick(tmp_path, monkeypatch):
             assert run["optimizer"] == "ngopt" and run["note"]
     summary = read_csv(folder / "summary.csv")
     assert {(r["problem"], r["optimizer"]) for r in summary} <= {
-        (p, o) for p in config.problems for o in optimizer_comparison.OPTIMIZERS
+        (p, o) for p in config.problems for o in config.optimizers
     }
     assert (folder / "convergence.png").stat().st_size > 0
     assert "final σ (N): median [IQR]" in (folder / "optimizers.md").read_text(encoding="utf-8")
@@ -109,6 +116,23 @@ def test_optimizer_comparison_quick(tmp_path, monkeypatch):
     assert (folder / "evaluations.csv").read_text() == (copy / "evaluations.csv").read_text()
 
 
+def test_the_comparison_machinery_on_a_synthetic_problem(tmp_path, monkeypatch):
+    """Every optimiser but PPO (which needs a design env) on the synthetic problem: microseconds a
+    simulation, the same runs, store, tables, figure and IOHprofiler files as on B1."""
+    optimizers = tuple(o for o in optimizer_comparison.OPTIMIZERS if o != "ppo")
+    config = optimizer_comparison.Config(out=tmp_path, problems=(SYNTHETIC,), optimizers=optimizers)
+    _check_comparison(config, tmp_path, monkeypatch)
+    reference = read_csv(tmp_path / "optimizers" / "reference.csv")
+    level = get_synthetic_problem(SYNTHETIC).sigma(np.zeros(3))
+    assert [(r["problem"], r["sigma_N"]) for r in reference] == [(SYNTHETIC, pytest.approx(float(level)))]
+
+
+@pytest.mark.slow  # the real quick study: about 300 simulations on B1 and SW1, and PPO
+def test_optimizer_comparison_quick(tmp_path, monkeypatch):
+    _check_comparison(optimizer_comparison.Config(out=tmp_path), tmp_path, monkeypatch)
+
+
+@pytest.mark.slow  # the real quick study: PPO, GA runs at four speeds and the mean-σ GA on B1
 def test_rl_studies_quick(tmp_path, monkeypatch):
     config = rl_studies.Config(out=tmp_path)
     folder = rl_studies.main(config)
@@ -143,6 +167,18 @@ def test_rl_studies_quick(tmp_path, monkeypatch):
 
     rl_studies.main(config)  # replayed from the store: nothing simulated
     assert (folder / "steps.csv").read_text(encoding="utf-8") == steps_text
+
+
+def test_the_committed_rl_data_remake_the_committed_report(tmp_path, monkeypatch):
+    """The RL study's tables and figures come from its CSV files alone (PPO needs a design env, so its
+    machinery has no synthetic stand-in: the real quick run is the slow test above)."""
+    committed = Path(__file__).parents[1] / "results" / "rl"
+    _no_simulation(monkeypatch)
+    outputs = ["rl.md", "learning_curves.png", "speed_policy.png", "robust_design.png"]
+    copy = _remake_from_data(committed, tmp_path, rl_studies, outputs)
+    assert (copy / "rl.md").read_text(encoding="utf-8") == (committed / "rl.md").read_text(encoding="utf-8")
+    for name in outputs[1:]:
+        assert (copy / name).stat().st_size > 0
 
 
 def test_policy_start_is_refused_where_the_bounds_are_not_centred_on_the_reference():
@@ -182,76 +218,13 @@ def test_a_lane_of_the_full_studies_names_its_problems():
 def test_the_comparison_runs_the_optimisers_it_is_given(tmp_path):
     """``--optimizers``: two processes with disjoint sets share a problem's runs (full_studies.sh)."""
     folder = optimizer_comparison.main(
-        optimizer_comparison.Config(out=tmp_path, problems=("B1",), optimizers=("random",))
+        optimizer_comparison.Config(out=tmp_path, problems=(SYNTHETIC,), optimizers=("random",))
     )
     runs = read_csv(folder / "runs.csv")
-    assert {(r["optimizer"], r["problem"], r["status"]) for r in runs} == {("random", "B1", "done")}
+    assert {(r["optimizer"], r["problem"], r["status"]) for r in runs} == {("random", SYNTHETIC, "done")}
     assert [r["seed"] for r in runs] == [0, 1]
     with pytest.raises(SystemExit):
         optimizer_comparison.cli(["--optimizers", "nelder-mead"])
-
-
-def _run_full_studies(tmp_path: Path, fail: str = "") -> tuple[subprocess.CompletedProcess, list[str]]:
-    """experiments/full_studies.sh with a stand-in ``python`` that logs its arguments (and fails on
-    those containing ``fail``): the commands it runs, each study's in the order it runs them. The
-    stand-in also logs each command with its parent's process id to ``lanes.txt``: one id per lane."""
-    bin_dir, log = tmp_path / "bin", tmp_path / "calls.txt"
-    bin_dir.mkdir()
-    stub = bin_dir / "python"
-    failing = f'case "$*" in *"{fail}"*) exit 3;; esac\n' if fail else ""
-    lanes = f'echo "$PPID $*" >> {tmp_path / "lanes.txt"}\n'
-    stub.write_text(f'#!/bin/sh\necho "$*" >> {log}\n{lanes}{failing}')
-    stub.chmod(0o755)
-    script = Path(__file__).parents[1] / "experiments" / "full_studies.sh"
-    run = subprocess.run(
-        ["bash", str(script), str(tmp_path / "out"), "2"],
-        env={"PATH": f"{bin_dir}:/usr/bin:/bin"}, capture_output=True, text=True, check=False,
-    )  # fmt: skip
-    return run, log.read_text().splitlines() if log.exists() else []
-
-
-def test_the_full_studies_script_runs_every_study_in_its_order(tmp_path):
-    run, calls = _run_full_studies(tmp_path)
-    assert run.returncode == 0, run.stderr
-    assert run.stderr == ""
-    out = f"--out {tmp_path / 'out'}"
-    assert calls[:2] == [
-        f"-m experiments.design_studies --full --problems B1 SW1 --workers 2 {out}",
-        f"-m experiments.design_studies --full --problems B2 SW2 B3 SW3 --workers 2 {out}",
-    ]
-    compared = []  # (problem, optimiser) of every comparison command
-    for call in (c.split() for c in calls[2:7] if "optimizer_comparison" in c):
-        named = (
-            call[call.index("--optimizers") + 1 : call.index("--workers")] if "--optimizers" in call else None
-        )
-        compared += [
-            (call[call.index("--problems") + 1], o) for o in named or optimizer_comparison.OPTIMIZERS
-        ]
-    assert sorted(compared) == sorted(
-        (p, o) for p in ("B1", "SW1") for o in optimizer_comparison.OPTIMIZERS
-    )  # each run once
-    lanes: dict[str, list[str]] = {}  # the lanes' commands by the lane's process id, in order
-    for line in (tmp_path / "lanes.txt").read_text().splitlines()[2:7]:
-        pid, command = line.split(" ", 1)
-        lanes.setdefault(pid, []).append(command.split()[1])
-    assert len(lanes) == 2
-    for studies in lanes.values():  # each lane: its share of the comparison, the headline, then RL
-        assert studies[-1] == "experiments.rl_studies"
-        assert set(studies[:-1]) == {"experiments.optimizer_comparison"}
-    assert calls[7:] == [
-        f"-m experiments.optimizer_comparison --full --workers 2 {out}",
-        f"-m experiments.rl_studies --full --workers 2 {out}",
-        f"-m catenary_env.cli report --out {tmp_path / 'out'}",
-    ]
-
-
-def test_the_full_studies_script_stops_when_a_lane_fails(tmp_path):
-    run, calls = _run_full_studies(tmp_path, fail="experiments.optimizer_comparison --full --problems B1")
-    assert run.returncode == 1
-    assert run.stderr.strip().startswith("a lane failed")
-    assert not any("rl_studies --full --problems B1" in c for c in calls)  # the rest of its lane
-    assert any("rl_studies --full --problems SW1" in c for c in calls)  # the other lane ran
-    assert len(calls) == 5  # and nothing after the lanes
 
 
 def test_an_interrupted_study_entry_point_ends_in_one_line(capsys):

@@ -1,5 +1,5 @@
 """Studies re-plot from their data files alone (docs/problems.md, 'Experiments'): no simulation in
-``report``."""
+``report``. The real quick studies run behind the ``slow`` marker (``python -m pytest -m slow``)."""
 
 from __future__ import annotations
 
@@ -87,3 +87,25 @@ def test_a_study_refuses_a_worker_count_before_simulating(module, workers, capsy
         study.cli(["--workers", workers])
     assert exit_.value.code == 2
     assert "--workers" in capsys.readouterr().err
+
+
+@pytest.mark.slow  # the real quick studies: seconds (pre-sag) to minutes (ablation)
+@pytest.mark.parametrize(
+    ("module", "outputs"),
+    [
+        ("presag", ["presag.csv", "presag.md", "presag.png"]),
+        ("convergence", ["convergence.csv", "convergence.md"]),
+        ("ablation", ["ablation.csv", "ablation.json", "ablation.md", "ablation.png"]),
+    ],
+    ids=["presag", "convergence", "ablation"],
+)
+def test_a_quick_study_writes_its_data_and_remakes_its_report_from_them(module, outputs, tmp_path):
+    study = importlib.import_module(f"experiments.{module}")
+    folder = study.main(study.Config(out=tmp_path))
+    for name in outputs:
+        assert (folder / name).stat().st_size > 0, name
+    table = next(name for name in outputs if name.endswith(".md"))
+    written = (folder / table).read_text(encoding="utf-8")
+    (folder / table).unlink()
+    study.report(folder)
+    assert (folder / table).read_text(encoding="utf-8") == written
