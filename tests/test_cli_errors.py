@@ -152,6 +152,8 @@ CASES: list[tuple[str, list[str], str, Callable[[Path], None] | None]] = [
     ("seed-negative", [*OPT, "--seed", "-1"], "seed", None),
     ("unknown-problem", ["optimize", "nosuch", "--budget", "5"], "nosuch", None),
     ("workers-zero", [*OPT, "--workers", "0"], "workers", None),
+    ("max-evaluations-zero", [*OPT, "--max-evaluations", "0"], "--max-evaluations", None),
+    ("progress-every-negative", [*OPT, "--progress-every", "-1"], "--progress-every", None),
     ("speed-range-ga", [*OPT, "--speed-range", "200", "300"], "--speed-range", None),
     ("workers-and-scheduler", [*OPT, "--scheduler", "tcp://127.0.0.1:9"], "--workers", None),
     ("scheduler-bad-address", [*OPT[:-3], "--scheduler", "nowhere:::"], "nowhere:::", None),

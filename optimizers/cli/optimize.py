@@ -172,6 +172,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``optimize``; return the exit status (0; 130 or 143 when interrupted, saying how to resume)."""
+    if args.max_evaluations is not None and args.max_evaluations < 1:
+        raise UsageError(f"--max-evaluations {args.max_evaluations}: must be at least 1 evaluation")
+    if not args.progress_every >= 0.0:
+        raise UsageError(f"--progress-every {args.progress_every}: must be a number of seconds >= 0")
     if args.save_policy is not None:
         if args.optimizer not in RL_OPTIMIZERS:
             raise UsageError(f"--save-policy is for --optimizer ppo, not {args.optimizer}")
