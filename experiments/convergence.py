@@ -121,4 +121,4 @@ def cli(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(run_cli(cli, "experiments.convergence"))
+    raise SystemExit(run_cli(cli, "python -m experiments.convergence"))

@@ -663,4 +663,4 @@ def cli(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(run_cli(cli, "experiments.design_studies"))
+    raise SystemExit(run_cli(cli, "python -m experiments.design_studies"))

@@ -472,4 +472,4 @@ def cli(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(run_cli(cli, "experiments.optimizer_comparison"))
+    raise SystemExit(run_cli(cli, "python -m experiments.optimizer_comparison"))

@@ -196,4 +196,4 @@ def cli(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(run_cli(cli, "experiments.presag"))
+    raise SystemExit(run_cli(cli, "python -m experiments.presag"))

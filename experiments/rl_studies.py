@@ -606,4 +606,4 @@ def cli(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(run_cli(cli, "experiments.rl_studies"))
+    raise SystemExit(run_cli(cli, "python -m experiments.rl_studies"))

@@ -93,4 +93,4 @@ def cli(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(run_cli(cli, "experiments.validation"))
+    raise SystemExit(run_cli(cli, "python -m experiments.validation"))

@@ -16,6 +16,8 @@ import json
 import sys
 from typing import Any
 
+from catenary_env.cli.progress import ProgressDisplay
+
 __all__ = ["add_parser", "run"]
 
 
@@ -96,6 +98,7 @@ def _proposals(args: argparse.Namespace) -> dict[str, Any]:
             )
     fidelity = args.fidelity or record.env_spec.fidelity
     proposals = []
+    progress = ProgressDisplay("propose", len(args.speed), "speeds", quiet=args.json or args.no_evaluate)
     for speed in args.speed:
         x = design_for_speed(policy, problem, speed)
         entry: dict[str, Any] = {
@@ -107,6 +110,8 @@ def _proposals(args: argparse.Namespace) -> dict[str, Any]:
             entry.update(feasible=outcome.feasible, sigma=outcome.sigma, reason=outcome.reason)
             entry["reference_sigma"] = _reference_sigma(record.problem, speed, fidelity)
         proposals.append(entry)
+        progress.update(len(proposals))
+    progress.finish()
     policy_record = dataclasses.asdict(record)
     return {
         "policy": str(args.policy),
