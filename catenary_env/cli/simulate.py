@@ -38,14 +38,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--uplift",
         type=float,
-        metavar="N",
+        metavar="FORCE",
         help="static uplift force, N (default: the pantograph's, or calibrated on the level design: once "
         "per catenary, speed and fidelity, then kept in the user's cache folder)",
     )
     p.add_argument(
         "--target-mean",
         type=float,
-        metavar="N",
+        metavar="FORCE",
         help="calibrate the uplift so the reference design's mean contact force is this, N "
         "(default: EN 50367, 0.00097 v² + 70 with v in km/h)",
     )
