@@ -267,3 +267,13 @@ def test_a_user_error_is_one_of_the_projects_own_types():
         assert issubclass(error, CatenaryError)
     assert issubclass(DesignError, ValueError) and issubclass(UsageError, ValueError)
     assert not issubclass(ValueError, CatenaryError)
+
+
+def test_an_os_error_of_a_file_the_user_named_becomes_a_user_error_naming_it():
+    from catenary_env.errors import CatenaryError, UserFileError
+
+    error = UserFileError.from_os_error(
+        FileNotFoundError(2, "No such file or directory", "/no/such"), "--out"
+    )
+    assert str(error) == "--out /no/such: No such file or directory"
+    assert isinstance(error, CatenaryError) and isinstance(error, OSError)
