@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .errors import MissingDependency
 from .fem.layout import CONTACT, MESSENGER, STITCH
 from .statics.shape_finding import StaticSolution
 
@@ -27,7 +28,7 @@ def pyplot() -> Any:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:  # pragma: no cover - depends on the environment
-        raise ImportError("plotting needs matplotlib: pip install 'catenary-env[plot]'") from None
+        raise MissingDependency("plotting needs matplotlib: pip install 'catenary-env[plot]'") from None
     return plt
 
 

@@ -9,9 +9,11 @@ from __future__ import annotations
 
 import dataclasses
 import tomllib
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from .errors import UsageError
 from .model.design import level_design
 from .model.options import ModellingOptions
 from .model.presets import load_catenary, load_pantograph
@@ -61,6 +63,36 @@ class ValidationRow:
         """Distance outside the range (0 inside), in the quantity's unit."""
         return max(self.low - self.value, self.value - self.high, 0.0)
 
+    def as_dict(self) -> dict[str, float | str | bool]:
+        """The row with its verdict and margin (the JSON of ``catenary validate``, the study's CSV)."""
+        return {**dataclasses.asdict(self), "passed": self.passed, "margin": self.margin}
+
+    def markdown(self) -> str:
+        """The row of :func:`markdown_table`: value and range in the quantity's unit, pass or the margin."""
+        scale, unit = DISPLAY_UNITS.get(self.quantity, (1.0, "N"))
+        verdict = "pass" if self.passed else f"FAIL (by {scale * self.margin:.2f} {unit})"
+        return (
+            f"| {self.speed_kmh:g} | {self.quantity} | {scale * self.value:.2f} {unit} | "
+            f"{scale * self.low:g} – {scale * self.high:g} | {verdict} |"
+        )
+
+
+DISPLAY_UNITS = {"max_support_uplift": (1e3, "mm"), "contact_loss_percent": (1.0, "%")}
+"""Scale from SI and unit of the quantities the table does not show in N."""
+
+ROW_UNITS = {
+    "speed_kmh": "km/h",
+    "value, low, high, margin": "N; m for max_support_uplift; % for contact_loss_percent",
+}
+"""Units of the numbers of :meth:`ValidationRow.as_dict`."""
+
+
+def markdown_table(rows: tuple[ValidationRow, ...] | list[ValidationRow]) -> str:
+    """The EN 50318:2002 table as Markdown: speed, quantity, value, accepted range, result (README.md,
+    'Validation')."""
+    header = ["| speed (km/h) | quantity | value | accepted range | result |", "|---|---|---|---|---|"]
+    return "\n".join(header + [row.markdown() for row in rows])
+
 
 @dataclass(frozen=True)
 class ValidationReport:
@@ -82,6 +114,10 @@ class ValidationReport:
     def passed(self) -> bool:
         return all(row.passed for row in self.rows)
 
+    def table(self) -> str:
+        """The table as Markdown (:func:`markdown_table`)."""
+        return markdown_table(self.rows)
+
 
 def load_ranges(name: str = "en50318-2002") -> dict[float, dict[str, tuple[float, float]]]:
     """Accepted ranges by speed (km/h) and quantity."""
@@ -97,6 +133,7 @@ def validate(
     speeds_kmh: tuple[float, ...] = (250.0, 300.0),
     fidelity: Fidelity | None = None,
     modelling: ModellingOptions | None = None,
+    progress: Callable[[float], None] | None = None,
 ) -> ValidationReport:
     """Simulate the EN 50318:2002 reference model and compare with the accepted ranges.
 
@@ -108,6 +145,8 @@ def validate(
         Defaults to the section of the preset (10 spans, central 2 analysed) with a converged mesh.
     modelling : ModellingOptions, optional
         Modelling choices in place of the preset's (the ablation study, docs/model.md, 'Modelling choices').
+    progress : callable, optional
+        Called with the fraction of the passages done, 0 to 1.
     """
     catenary = load_catenary("en50318-2002")
     if modelling is not None:
@@ -126,12 +165,19 @@ def validate(
     rows = []
     for speed in speeds_kmh:
         if speed not in ranges:
-            raise ValueError(f"speed {speed} km/h: the standard gives ranges at {sorted(ranges)} km/h only")
+            raise UsageError(f"speed {speed:g} km/h: the standard gives ranges at {sorted(ranges)} km/h only")
+    for i, speed in enumerate(speeds_kmh):
+        part = None if progress is None else _part(progress, i, len(speeds_kmh))
         stats = simulate(
-            catenary, pantograph, level_design(catenary), speed / 3.6, fidelity
+            catenary, pantograph, level_design(catenary), speed / 3.6, fidelity, progress=part
         ).statistics.as_dict()
         for quantity in QUANTITIES:
             low, high = ranges[speed][quantity]
             rows.append(ValidationRow(speed, quantity, stats[quantity], low, high))
     assert pantograph.uplift_force is not None
     return ValidationReport(tuple(rows), fidelity, pantograph.uplift_force)
+
+
+def _part(progress: Callable[[float], None], index: int, count: int) -> Callable[[float], None]:
+    """The progress callback of passage ``index`` of ``count``: its fraction, as a fraction of them all."""
+    return lambda fraction: progress((index + fraction) / count)

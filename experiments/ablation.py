@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
@@ -31,7 +32,18 @@ from catenary_env.model.presets import load_catenary, load_pantograph
 from catenary_env.pipeline import FIDELITIES, Fidelity, calibrate_uplift, en50367_mean_force, simulate
 from catenary_env.validation import validate
 
-from .common import DEFAULT_OUT, read_csv, run_cli, study_dir, worker_count, write_csv, write_json
+from .common import (
+    DEFAULT_OUT,
+    add_full_option,
+    add_out_option,
+    add_workers_option,
+    read_csv,
+    run_cli,
+    run_study,
+    study_dir,
+    write_csv,
+    write_json,
+)
 
 NAME = "ablation"
 EN_SPEEDS = (250.0, 300.0)  # km/h
@@ -283,15 +295,20 @@ def _figure(rows: list[dict], path: Path) -> None:
     plt.close(fig)
 
 
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The study's options (``catenary experiment ablation`` and ``python -m experiments.ablation``)."""
+    add_full_option(
+        parser,
+        "the validation's own model and the 20-span benchmark (hours), instead of the coarse test model",
+    )
+    add_workers_option(parser, 1, "the modelling choices' simulations")
+    add_out_option(parser)
+
+
 def cli(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--full", action="store_true", help="the validation's own setting (hours)")
-    parser.add_argument("--workers", type=worker_count, default=1, help="worker processes (default 1)")
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
-    args = parser.parse_args(argv)
-    print(report(main(Config(full=args.full, out=args.out, workers=args.workers))))
-    return 0
+    """``python -m experiments.ablation``: the study with the options of :func:`add_arguments`."""
+    return run_study(sys.modules[__name__], argv, "python -m experiments.ablation")
 
 
 if __name__ == "__main__":
-    raise SystemExit(run_cli(cli, "experiments.ablation"))
+    raise SystemExit(run_cli(cli, "python -m experiments.ablation"))

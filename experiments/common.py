@@ -1,16 +1,26 @@
-"""What the studies share: the output folder, tidy CSV/JSON writing and reading."""
+"""What the studies share: their command-line options and entry point, the output folder, tidy CSV/JSON
+writing and reading.
+
+Each study module declares its options once, in ``add_arguments(parser)``, with a frozen ``Config`` whose
+fields are named like them; :func:`run_study` builds the parser from it for both entry points,
+``python -m experiments.NAME`` and ``catenary experiment NAME``, so the two take the same options.
+"""
 
 from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
 import json
-import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
-from catenary_env.cli_errors import interruption, raise_on_sigterm
+from catenary_env.cli import CommandParser
+from catenary_env.cli.exits import raise_on_sigterm, run_command
+from catenary_env.cli.paths import check_output_folder
+from catenary_env.errors import UserFileError
 
 DEFAULT_OUT = Path("results")
 STORE = "runs.sqlite"
@@ -32,8 +42,13 @@ def worker_count(text: str) -> int:
 
 
 def study_dir(out: Path, name: str) -> Path:
+    """The study's folder ``out/name``, created if absent (a folder that cannot be made is a user error,
+    naming ``--out``)."""
     path = Path(out) / name
-    path.mkdir(parents=True, exist_ok=True)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise UserFileError.from_os_error(error, "--out") from error
     return path
 
 
@@ -74,13 +89,76 @@ def markdown_table(rows: list[dict[str, Any]], columns: list[tuple[str, str, str
     return "\n".join(lines)
 
 
+def add_full_option(parser: argparse.ArgumentParser, full: str) -> None:
+    """``--full``: the study's full setting (``full`` says what it is and how long it takes)."""
+    parser.add_argument(
+        "--full", action="store_true", help=f"the full setting: {full}; default: the quick one"
+    )
+
+
+def add_out_option(parser: argparse.ArgumentParser) -> None:
+    """``--out FOLDER``: where the study writes its folder."""
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=DEFAULT_OUT,
+        metavar="FOLDER",
+        help=f"output folder; the study writes into FOLDER/<study> (default: {DEFAULT_OUT})",
+    )
+
+
+def add_workers_option(parser: argparse.ArgumentParser, default: int, what: str = "the simulations") -> None:
+    """``--workers N``: local worker processes (``what`` they run)."""
+    parser.add_argument(
+        "--workers",
+        type=worker_count,
+        default=default,
+        metavar="N",
+        help=f"local worker processes for {what}, at least 1 (default {default})",
+    )
+
+
+def add_store_option(parser: argparse.ArgumentParser) -> None:
+    """``--store PATH``: the run store, shared by the studies by default."""
+    parser.add_argument(
+        "--store",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help=f"SQLite run store (default: OUT/{STORE}, shared by the studies: one reuses what another "
+        "simulated)",
+    )
+
+
+def config_from(config_class: Any, args: argparse.Namespace) -> Any:
+    """The study's ``Config`` from its parsed options: each field from the option of its name (lists as
+    tuples); a field without an option keeps its default."""
+    values = {}
+    for field in dataclasses.fields(config_class):
+        if hasattr(args, field.name):
+            value = getattr(args, field.name)
+            values[field.name] = tuple(value) if isinstance(value, list) else value
+    return config_class(**values)
+
+
+def study_parser(study: ModuleType, prog: str) -> argparse.ArgumentParser:
+    """The parser of a study's options (its ``add_arguments``), the same for both entry points."""
+    parser = CommandParser(prog=prog, description=(study.__doc__ or "").split("\n\n")[0])
+    study.add_arguments(parser)
+    return parser
+
+
+def run_study(study: ModuleType, argv: Sequence[str] | None, prog: str) -> int:
+    """Parse a study's options, run it and print its report; 0."""
+    args = study_parser(study, prog).parse_args(argv)
+    check_output_folder(args.out, "--out")
+    print(study.report(study.main(config_from(study.Config, args))))
+    return 0
+
+
 def run_cli(cli: Callable[[], int], name: str) -> int:
-    """Run a study's ``python -m`` entry point as ``catenary experiment`` does: Ctrl-C or SIGTERM end it with
-    one line, not a traceback (what was simulated is in the run store; run it again to resume)."""
+    """Run a study's ``python -m`` entry point as ``catenary experiment`` does: a user error ends in one line
+    (exit status 2), a bug in its traceback; Ctrl-C or SIGTERM end it with one line, not a traceback (what was
+    simulated is in the run store; run it again to resume)."""
     raise_on_sigterm()
-    try:
-        return cli()
-    except KeyboardInterrupt as error:
-        what, status = interruption(error)
-        print(f"{name}: {what}; run it again to resume", file=sys.stderr)
-        return status
+    return run_command(name, lambda _: cli(), argparse.Namespace(), "; run it again to resume")

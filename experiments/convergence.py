@@ -9,6 +9,7 @@ contact wire (the messenger's is twice it) and the time step, σ and the change 
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,7 +18,17 @@ from catenary_env.model.design import level_design
 from catenary_env.model.presets import load_catenary, load_pantograph
 from catenary_env.pipeline import Fidelity, simulate
 
-from .common import DEFAULT_OUT, markdown_table, read_csv, run_cli, study_dir, write_csv
+from .common import (
+    DEFAULT_OUT,
+    add_full_option,
+    add_out_option,
+    markdown_table,
+    read_csv,
+    run_cli,
+    run_study,
+    study_dir,
+    write_csv,
+)
 
 NAME = "convergence"
 SETTINGS = ((1.0, 2e-3), (1.0, 1e-3), (0.5, 1e-3), (0.25, 1e-3), (0.5, 5e-4), (0.25, 5e-4))
@@ -98,15 +109,16 @@ def report(folder: Path) -> str:
     return table
 
 
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The study's options (``catenary experiment convergence`` and ``python -m experiments.convergence``)."""
+    add_full_option(parser, "20 spans, 10 analysed (minutes), instead of 5 spans, 1 analysed")
+    add_out_option(parser)
+
+
 def cli(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--full", action="store_true", help="20 spans (minutes) instead of 5")
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
-    args = parser.parse_args(argv)
-    folder = main(Config(full=args.full, out=args.out))
-    print(report(folder))
-    return 0
+    """``python -m experiments.convergence``: the study with the options of :func:`add_arguments`."""
+    return run_study(sys.modules[__name__], argv, "python -m experiments.convergence")
 
 
 if __name__ == "__main__":
-    raise SystemExit(run_cli(cli, "experiments.convergence"))
+    raise SystemExit(run_cli(cli, "python -m experiments.convergence"))

@@ -28,6 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sys
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -43,7 +44,19 @@ from catenary_env.problems.design_problem import DesignProblem, resolve_fidelity
 from optimizers.ga import POPULATION_SIZES, GAOptions
 from optimizers.runner import optimize
 
-from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, run_cli, study_dir, worker_count, write_csv
+from .common import (
+    DEFAULT_OUT,
+    STORE,
+    add_full_option,
+    add_out_option,
+    add_workers_option,
+    markdown_table,
+    read_csv,
+    run_cli,
+    run_study,
+    study_dir,
+    write_csv,
+)
 
 NAME = "design"
 PROBLEMS = ("B1", "B2", "B3", "SW1", "SW2", "SW3")
@@ -624,20 +637,30 @@ def _convergence_figure(done: list[tuple[dict, Path]], path: Path) -> None:
     plt.close(fig)
 
 
-def cli(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--full", action="store_true", help="20 spans, the study's GA (hours per problem)")
-    parser.add_argument(
-        "--problems", nargs="+", default=list(PROBLEMS), choices=PROBLEMS, help="default: all six"
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The study's options (``catenary experiment design`` and ``python -m experiments.design_studies``)."""
+    add_full_option(
+        parser, "20 spans and the study's GA (hours per problem), instead of 5 spans and a small GA"
     )
-    parser.add_argument("--workers", type=worker_count, default=2, help="worker processes (default 2)")
-    parser.add_argument("--seed", type=int, default=0, help="the GA's seed (default 0)")
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
-    args = parser.parse_args(argv)
-    config = Config(args.full, args.out, args.workers, tuple(args.problems), args.seed)
-    print(report(main(config)))
-    return 0
+    parser.add_argument(
+        "--problems",
+        nargs="+",
+        default=list(PROBLEMS),
+        choices=PROBLEMS,
+        metavar="NAME",
+        help=f"the design problems studied, of {' '.join(PROBLEMS)} (default: all six)",
+    )
+    add_workers_option(parser, 2)
+    parser.add_argument(
+        "--seed", type=int, default=0, metavar="S", help="the GA's random seed, an integer >= 0 (default 0)"
+    )
+    add_out_option(parser)
+
+
+def cli(argv: list[str] | None = None) -> int:
+    """``python -m experiments.design_studies``: the study with the options of :func:`add_arguments`."""
+    return run_study(sys.modules[__name__], argv, "python -m experiments.design_studies")
 
 
 if __name__ == "__main__":
-    raise SystemExit(run_cli(cli, "experiments.design_studies"))
+    raise SystemExit(run_cli(cli, "python -m experiments.design_studies"))

@@ -56,7 +56,20 @@ from optimizers.runner import optimize
 from optimizers.store import RunStore
 from optimizers.synthetic import SYNTHETIC_PROBLEMS
 
-from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, run_cli, study_dir, worker_count, write_csv
+from .common import (
+    DEFAULT_OUT,
+    STORE,
+    add_full_option,
+    add_out_option,
+    add_store_option,
+    add_workers_option,
+    markdown_table,
+    read_csv,
+    run_cli,
+    run_study,
+    study_dir,
+    write_csv,
+)
 from .design_evaluations import evaluate_designs, study_problem
 from .iohprofiler import runs_from_rows, write_algorithm
 from .rl_studies import policy_options, train_policy
@@ -438,34 +451,27 @@ def _write_ioh(root: Path, evaluations: list[dict[str, Any]], runs: list[dict[st
             )  # fmt: skip
 
 
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The study's options (``catenary experiment optimizers`` and its ``python -m`` entry point)."""
+    add_full_option(parser, "the study fidelity, 300 simulations a run, 5 seeds (hours)")
+    parser.add_argument(
+        "--problems", nargs="+", default=list(PROBLEMS), choices=list(DESIGN_PROBLEMS), metavar="NAME",
+        help=f"the design problems, of {' '.join(DESIGN_PROBLEMS)} (default: {' '.join(PROBLEMS)})",
+    )  # fmt: skip
+    parser.add_argument(
+        "--optimizers", nargs="+", default=list(OPTIMIZERS), choices=list(OPTIMIZERS), metavar="NAME",
+        help=f"the optimisers, of {' '.join(OPTIMIZERS)} (default: all); disjoint sets in two processes "
+        "share a problem's runs",
+    )  # fmt: skip
+    add_workers_option(parser, 1, "the simulations of a batch (PPO steps its env in this process)")
+    add_out_option(parser)
+    add_store_option(parser)
+
+
 def cli(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument(
-        "--full", action="store_true", help="study fidelity, 300 simulations, 5 seeds (hours)"
-    )
-    parser.add_argument(
-        "--problems", nargs="+", default=list(PROBLEMS), choices=list(DESIGN_PROBLEMS),
-        help=f"default: {' '.join(PROBLEMS)}",
-    )  # fmt: skip
-    parser.add_argument(
-        "--optimizers", nargs="+", default=list(OPTIMIZERS), choices=list(OPTIMIZERS),
-        help="default: all; disjoint sets in two processes share a problem's runs",
-    )  # fmt: skip
-    parser.add_argument(
-        "--workers", type=worker_count, default=1, help="worker processes per batch (default 1)"
-    )
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
-    parser.add_argument(
-        "--store", type=Path, default=None, help="run store (default: OUT/runs.sqlite, shared by the studies)"
-    )
-    args = parser.parse_args(argv)
-    config = Config(
-        full=args.full, out=args.out, workers=args.workers, store=args.store,
-        problems=tuple(args.problems), optimizers=tuple(args.optimizers),
-    )  # fmt: skip
-    print(report(main(config)))
-    return 0
+    """``python -m experiments.optimizer_comparison``: the study with the options of :func:`add_arguments`."""
+    return run_study(sys.modules[__name__], argv, "python -m experiments.optimizer_comparison")
 
 
 if __name__ == "__main__":
-    raise SystemExit(run_cli(cli, "experiments.optimizer_comparison"))
+    raise SystemExit(run_cli(cli, "python -m experiments.optimizer_comparison"))

@@ -12,6 +12,7 @@ spans) on the problems' 1 cm grid.
 from __future__ import annotations
 
 import argparse
+import sys
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,7 +21,18 @@ import numpy as np
 
 from catenary_env.problems import evaluate_problem, get_problem
 
-from .common import DEFAULT_OUT, markdown_table, read_csv, run_cli, study_dir, worker_count, write_csv
+from .common import (
+    DEFAULT_OUT,
+    add_full_option,
+    add_out_option,
+    add_workers_option,
+    markdown_table,
+    read_csv,
+    run_cli,
+    run_study,
+    study_dir,
+    write_csv,
+)
 
 NAME = "presag"
 PROBLEMS = ("BPresag", "SWPresag")
@@ -171,17 +183,17 @@ def _figure(rows: list[dict], best: list[dict], path: Path) -> None:
     plt.close(fig)
 
 
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The study's options (``catenary experiment presag`` and ``python -m experiments.presag``)."""
+    add_full_option(parser, "20 spans, pre-sags on a 1 cm grid, 7 speeds from 200 to 320 km/h (hours)")
+    add_workers_option(parser, 2)
+    add_out_option(parser)
+
+
 def cli(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument(
-        "--full", action="store_true", help="20 spans on the 1 cm grid (hours) instead of quick"
-    )
-    parser.add_argument("--workers", type=worker_count, default=2, help="worker processes (default 2)")
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
-    args = parser.parse_args(argv)
-    print(report(main(Config(full=args.full, out=args.out, workers=args.workers))))
-    return 0
+    """``python -m experiments.presag``: the study with the options of :func:`add_arguments`."""
+    return run_study(sys.modules[__name__], argv, "python -m experiments.presag")
 
 
 if __name__ == "__main__":
-    raise SystemExit(run_cli(cli, "experiments.presag"))
+    raise SystemExit(run_cli(cli, "python -m experiments.presag"))

@@ -60,7 +60,20 @@ from optimizers.rl import DesignPolicy, EnvSpec, PPOOptions, design_for_speed, t
 from optimizers.runner import optimize
 from optimizers.store import RunStore
 
-from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, run_cli, study_dir, worker_count, write_csv
+from .common import (
+    DEFAULT_OUT,
+    STORE,
+    add_full_option,
+    add_out_option,
+    add_store_option,
+    add_workers_option,
+    markdown_table,
+    read_csv,
+    run_cli,
+    run_study,
+    study_dir,
+    write_csv,
+)
 from .design_evaluations import evaluate_designs, mean_sigma_problem
 
 NAME = "rl"
@@ -571,27 +584,24 @@ def _robust_figure(robust: list[dict[str, Any]], path: Path) -> None:
     _save(plt, fig, path)
 
 
-def cli(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--full", action="store_true", help="study fidelity, B1 and SW1 (hours)")
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The study's options (``catenary experiment rl`` and ``python -m experiments.rl_studies``)."""
+    add_full_option(
+        parser, "the study fidelity, B1 and SW1, budgets of hundreds to thousands of simulations (hours)"
+    )
     parser.add_argument(
-        "--problems", nargs="+", default=[], choices=list(POPULATION_SIZES),
-        help="default: B1 SW1 (quick: B1)",
+        "--problems", nargs="+", default=[], choices=list(POPULATION_SIZES), metavar="NAME",
+        help=f"the design problems, of {' '.join(POPULATION_SIZES)} (default: B1 SW1; quick: B1)",
     )  # fmt: skip
-    parser.add_argument(
-        "--workers", type=worker_count, default=1, help="worker processes for the GA (default 1)"
-    )
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
-    parser.add_argument(
-        "--store", type=Path, default=None, help="run store (default: OUT/runs.sqlite, shared by the studies)"
-    )
-    args = parser.parse_args(argv)
-    config = Config(
-        full=args.full, out=args.out, workers=args.workers, store=args.store, problems=tuple(args.problems)
-    )
-    print(report(main(config)))
-    return 0
+    add_workers_option(parser, 1, "the GA's and the given designs' simulations (PPO steps in this process)")
+    add_out_option(parser)
+    add_store_option(parser)
+
+
+def cli(argv: list[str] | None = None) -> int:
+    """``python -m experiments.rl_studies``: the study with the options of :func:`add_arguments`."""
+    return run_study(sys.modules[__name__], argv, "python -m experiments.rl_studies")
 
 
 if __name__ == "__main__":
-    raise SystemExit(run_cli(cli, "experiments.rl_studies"))
+    raise SystemExit(run_cli(cli, "python -m experiments.rl_studies"))

@@ -9,12 +9,22 @@ the standard's model is itself small (10 spans).
 from __future__ import annotations
 
 import argparse
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from catenary_env.validation import validate
+from catenary_env.validation import DISPLAY_UNITS, ValidationRow, markdown_table, validate
 
-from .common import DEFAULT_OUT, read_csv, run_cli, study_dir, write_csv
+from .common import (
+    DEFAULT_OUT,
+    add_full_option,
+    add_out_option,
+    read_csv,
+    run_cli,
+    run_study,
+    study_dir,
+    write_csv,
+)
 
 NAME = "validation"
 
@@ -27,18 +37,7 @@ class Config:
 
 def main(config: Config) -> Path:
     result = validate((250.0, 300.0))
-    rows = [
-        {
-            "speed_kmh": r.speed_kmh,
-            "quantity": r.quantity,
-            "value": r.value,
-            "low": r.low,
-            "high": r.high,
-            "passed": int(r.passed),
-            "margin": r.margin,
-        }
-        for r in result.rows
-    ]
+    rows = [{**r.as_dict(), "passed": int(r.passed)} for r in result.rows]
     folder = study_dir(config.out, NAME)
     write_csv(folder / "en50318.csv", rows)
     report(folder)
@@ -47,36 +46,27 @@ def main(config: Config) -> Path:
 
 def report(folder: Path) -> str:
     """Markdown table and a figure from the CSV (no simulation)."""
-    rows = read_csv(folder / "en50318.csv")
-    lines = ["| speed (km/h) | quantity | value | accepted range | result |", "|---|---|---|---|---|"]
-    for r in rows:
-        scale, unit = (
-            (1e3, "mm")
-            if r["quantity"] == "max_support_uplift"
-            else (1.0, "%" if "percent" in r["quantity"] else "N")
-        )
-        verdict = "pass" if r["passed"] else f"FAIL (by {scale * r['margin']:.2f} {unit})"
-        lines.append(
-            f"| {r['speed_kmh']:g} | {r['quantity']} | {scale * r['value']:.2f} {unit} | "
-            f"{scale * r['low']:g} – {scale * r['high']:g} | {verdict} |"
-        )
-    table = "\n".join(lines)
+    rows = [
+        ValidationRow(r["speed_kmh"], r["quantity"], r["value"], r["low"], r["high"])
+        for r in read_csv(folder / "en50318.csv")
+    ]
+    table = markdown_table(rows)
     (folder / "en50318.md").write_text(table + "\n", encoding="utf-8")
     _figure(rows, folder / "en50318.png")
     return table
 
 
-def _figure(rows: list[dict], path: Path) -> None:
+def _figure(rows: list[ValidationRow], path: Path) -> None:
     from catenary_env.plots import pyplot
 
     plt = pyplot()
-    quantities = [q for q in dict.fromkeys(r["quantity"] for r in rows) if q != "contact_loss_percent"]
+    quantities = [q for q in dict.fromkeys(r.quantity for r in rows) if q != "contact_loss_percent"]
     fig, axes = plt.subplots(1, len(quantities), figsize=(2.0 * len(quantities), 3.2))
     for ax, quantity in zip(axes, quantities, strict=True):
-        for i, r in enumerate(r for r in rows if r["quantity"] == quantity):
-            scale = 1e3 if quantity == "max_support_uplift" else 1.0
-            ax.plot([i, i], [scale * r["low"], scale * r["high"]], color="0.7", lw=8, solid_capstyle="butt")
-            ax.plot(i, scale * r["value"], "o", color="C2" if r["passed"] else "C3")
+        for i, r in enumerate(r for r in rows if r.quantity == quantity):
+            scale = DISPLAY_UNITS.get(quantity, (1.0, "N"))[0]
+            ax.plot([i, i], [scale * r.low, scale * r.high], color="0.7", lw=8, solid_capstyle="butt")
+            ax.plot(i, scale * r.value, "o", color="C2" if r.passed else "C3")
         ax.set_xticks([0, 1], ["250", "300"])
         ax.set_xlim(-0.6, 1.6)
         ax.set_title(
@@ -91,13 +81,16 @@ def _figure(rows: list[dict], path: Path) -> None:
     plt.close(fig)
 
 
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The study's options (``catenary experiment validation`` and ``python -m experiments.validation``)."""
+    add_full_option(parser, "the same model as the quick one (the standard's model is small: minutes)")
+    add_out_option(parser)
+
+
 def cli(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: results)")
-    args = parser.parse_args(argv)
-    print(report(main(Config(out=args.out))))
-    return 0
+    """``python -m experiments.validation``: the study with the options of :func:`add_arguments`."""
+    return run_study(sys.modules[__name__], argv, "python -m experiments.validation")
 
 
 if __name__ == "__main__":
-    raise SystemExit(run_cli(cli, "experiments.validation"))
+    raise SystemExit(run_cli(cli, "python -m experiments.validation"))

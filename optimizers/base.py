@@ -38,6 +38,7 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from catenary_env.errors import UnknownNameError, UsageError
 from catenary_env.problems.registry import Registry
 
 from .problem import GridSpace
@@ -189,9 +190,9 @@ class Optimizer(abc.ABC):
 
     def __init__(self, space: GridSpace, budget: int, seed: int) -> None:
         if budget < 1:
-            raise ValueError(f"budget = {budget}: must be at least 1 simulation")
+            raise UsageError(f"budget = {budget}: must be at least 1 simulation")
         if seed < 0:
-            raise ValueError(f"seed = {seed}: must be >= 0")
+            raise UsageError(f"seed = {seed}: must be >= 0")
         self.space = space
         self.n_levels = space.n_levels
         self.budget = int(budget)
@@ -295,5 +296,5 @@ def register_optimizer(spec: OptimizerSpec) -> OptimizerSpec:
 def get_optimizer(name: str) -> OptimizerSpec:
     """The registry entry ``name``; KeyError lists the names available."""
     if name not in OPTIMIZERS:
-        raise KeyError(f"unknown optimizer {name!r}; available: {', '.join(sorted(OPTIMIZERS))}")
+        raise UnknownNameError(f"unknown optimizer {name!r}; available: {', '.join(sorted(OPTIMIZERS))}")
     return OPTIMIZERS[name]

@@ -39,6 +39,7 @@ from types import TracebackType
 from typing import Any, Protocol
 
 from catenary_env.blas_threads import limit_process
+from catenary_env.errors import CatenaryError, MissingDependency, UsageError
 
 from .problem import Outcome, SimulateFunction
 
@@ -55,6 +56,10 @@ __all__ = [
 
 SimulationArguments = tuple[tuple[float, ...], float, str]
 """``(x, speed_kmh, fidelity)``: the arguments of one call of a problem's ``simulate``."""
+
+
+class SchedulerUnreachable(CatenaryError, ConnectionError):
+    """The Dask scheduler the user named (``--scheduler``) did not answer; the message gives the address."""
 
 
 class EvaluationBackend(Protocol):
@@ -161,7 +166,7 @@ class ProcessPoolBackend(_Closing):
 
     def __init__(self, n_workers: int) -> None:
         if n_workers < 1:
-            raise ValueError(f"n_workers = {n_workers}: must be at least 1")
+            raise UsageError(f"n_workers = {n_workers}: must be at least 1")
         self.description = f"{n_workers} local processes"
         context = multiprocessing.get_context("spawn")
         self._pool = concurrent.futures.ProcessPoolExecutor(
@@ -215,14 +220,14 @@ class DaskBackend(_Closing):
         try:
             from distributed import Client
         except ImportError as error:
-            raise ImportError(
+            raise MissingDependency(
                 "--scheduler needs Dask distributed: pip install catenary-env[parallel]"
             ) from error
         self.description = f"Dask cluster at {scheduler}"
         try:
             self._client = Client(scheduler, timeout=SCHEDULER_TIMEOUT)
         except (OSError, TimeoutError, ValueError) as error:
-            raise ConnectionError(
+            raise SchedulerUnreachable(
                 f"--scheduler {scheduler}: no Dask scheduler answered within {SCHEDULER_TIMEOUT:g} s "
                 f"({type(error).__name__}: {error}); check the address, or start one with: dask scheduler"
             ) from error

@@ -25,6 +25,8 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
+from catenary_env.errors import MissingDependency
+
 from .base import Optimizer, OptimizerSpec, register_optimizer
 from .problem import GridSpace
 
@@ -48,11 +50,11 @@ INFEASIBLE_LOSS = 1.0e6
 
 
 def import_nevergrad() -> Any:
-    """The nevergrad module, or an ImportError that says how to install it."""
+    """The nevergrad module, or a MissingDependency (an ImportError) that says how to install it."""
     try:
         import nevergrad
     except ImportError as error:
-        raise ImportError(
+        raise MissingDependency(
             "the nevergrad optimisers need nevergrad: pip install catenary-env[optim]"
         ) from error
     return nevergrad

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from catenary_env.errors import UnknownNameError
+
 from .catenary_adapter import catenary_problem
 from .problem import GridProblem
 from .synthetic import SYNTHETIC_PROBLEMS
@@ -23,4 +25,6 @@ def resolve_problem(problem: GridProblem | str) -> GridProblem:
         return catenary_problem(problem)
     except KeyError as error:
         message = error.args[0] if error.args else repr(problem)
-        raise KeyError(f"{message}; or a synthetic problem: {', '.join(SYNTHETIC_PROBLEMS)}") from None
+        raise UnknownNameError(
+            f"{message}; or a synthetic problem: {', '.join(SYNTHETIC_PROBLEMS)}"
+        ) from None

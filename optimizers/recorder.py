@@ -12,9 +12,10 @@ import importlib.metadata
 import json
 from typing import Any
 
+from catenary_env.cli.progress import ProgressDisplay
+
 from .base import EvaluationRecord, OptimizationResult, best_record
 from .problem import GridSpace
-from .progress import ProgressDisplay
 from .store import RunConfig, RunStore, StoredEvaluation, StoreError
 
 __all__ = ["RunRecorder", "open_run", "options_json", "package_version"]
@@ -152,9 +153,7 @@ class RunRecorder:
         self._charged_in_batch += int(record.charged)
         if record.loss != float("inf") and (self._best_sigma is None or record.loss < self._best_sigma):
             self._best_sigma = record.loss
-        self.progress.update(
-            self.n_charged + self._charged_in_batch, len(self.history) + self._done_in_batch, self._best_sigma
-        )
+        self._show(self.n_charged + self._charged_in_batch, len(self.history) + self._done_in_batch)
 
     def append(self, record: EvaluationRecord) -> None:
         """Add the next evaluation of the history."""
@@ -167,13 +166,18 @@ class RunRecorder:
         self._charged_in_batch = max(0, self._charged_in_batch - int(record.charged))
         if record.loss != float("inf") and (self._best_sigma is None or record.loss < self._best_sigma):
             self._best_sigma = record.loss
-        self.progress.update(self.n_charged, len(self.history), self._best_sigma)
+        self._show(self.n_charged, len(self.history))
+
+    def _show(self, n_charged: int, n_evaluations: int, force: bool = False) -> None:
+        """Show the simulations spent, the evaluations and the best σ so far on the progress display."""
+        best = "none feasible yet" if self._best_sigma is None else f"best sigma {self._best_sigma:.3f} N"
+        self.progress.update(n_charged, f"{n_evaluations} evaluations, {best}", force)
 
     def result(self, stop_reason: str) -> OptimizationResult:
         """Mark the run finished in the store and return its result."""
         self.store.finish_run(self.run_id, stop_reason)
         best = best_record(self.history)
-        self.progress.update(self.n_charged, len(self.history), self._best_sigma, force=True)
+        self._show(self.n_charged, len(self.history), force=True)
         self.progress.finish(f"stopped ({stop_reason})")
         config = self.config
         return OptimizationResult(

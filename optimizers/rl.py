@@ -56,9 +56,11 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from catenary_env.cli.progress import ProgressDisplay
+from catenary_env.errors import CatenaryError, MissingDependency
+
 from .base import EvaluationRecord, OptimizationResult
 from .problem import GridProblem, GridSpace
-from .progress import ProgressDisplay
 from .recorder import RunRecorder, open_run, package_version
 from .store import RunConfig, RunStore
 
@@ -79,11 +81,12 @@ __all__ = [
 
 
 def import_stable_baselines3() -> Any:
-    """The stable_baselines3 module, or an ImportError that says how to install it."""
+    """The stable_baselines3 module, or a :class:`~catenary_env.errors.MissingDependency` (an ImportError)
+    that says how to install it."""
     try:
         import stable_baselines3
     except ImportError as error:
-        raise ImportError(
+        raise MissingDependency(
             "the RL design policies need stable-baselines3: pip install catenary-env[rl]"
         ) from error
     return stable_baselines3
@@ -371,7 +374,7 @@ def train_design_policy(
             store if isinstance(store, RunStore) else stack.enter_context(RunStore(store or ":memory:"))
         )
         run_id, resumed = open_run(run_store, config, resume, start_if_none)
-        progress = ProgressDisplay(f"ppo on {space.name}", int(budget), quiet=quiet)
+        progress = ProgressDisplay(f"ppo on {space.name}", int(budget), "simulations", quiet=quiet)
         recorder = RunRecorder(run_store, run_id, config, space, "env", progress, resumed)
         vec_env = _vector_env(env_spec, recorder, space, settings)
         stack.callback(vec_env.close)
@@ -463,6 +466,18 @@ def design_for_speed(policy: DesignPolicy, problem: GridProblem, speed_kmh: floa
 POLICY_MEMBER = "catenary_env_policy.json"
 """The member of a saved policy's zip archive that describes it (stable-baselines3 ignores it)."""
 POLICY_FORMAT = 1
+
+MODEL_MEMBERS = frozenset(
+    {"data", "policy.pth", "policy.optimizer.pth", "pytorch_variables.pth", "_stable_baselines3_version",
+     "system_info.txt"}
+)  # fmt: skip
+"""The members of a PPO model saved by stable-baselines3 (``BaseAlgorithm.save``); ``data`` (JSON, whose
+``:serialized:`` entries are pickled) and ``policy.pth`` (the weights) are always there."""
+
+
+class PolicyFileError(CatenaryError, ValueError):
+    """A file given as a saved policy that is not one (missing, a folder, not a zip archive, no record or a
+    damaged one, other members than a saved model's); the message names the file and what is wrong."""
 
 
 @dataclass(frozen=True)
@@ -582,35 +597,67 @@ def save_policy(
 def load_policy(path: str | os.PathLike[str]) -> tuple[DesignPolicy, PolicyRecord]:
     """Read a policy saved by :func:`save_policy`.
 
+    Loading the model unpickles parts of it (stable-baselines3 does: the ``:serialized:`` entries of its
+    ``data`` member): a policy file from someone else can run code. Load only files you made or trust. What
+    is not a policy file is refused before stable-baselines3 reads it (:func:`check_policy_file`).
+
     Raises
     ------
-    OSError
-        The file cannot be read.
-    ValueError
-        Not a policy file (not a zip, or no :data:`POLICY_MEMBER`), or a damaged one: the message names the
-        file and what is wrong.
+    PolicyFileError
+        Not a policy file (missing, a folder, not a zip, no :data:`POLICY_MEMBER`, other members than a saved
+        PPO model's), or a damaged one: the message names the file and what is wrong.
     """
     source = Path(path)
-    if source.is_dir():
-        raise IsADirectoryError(21, "is a folder; give a policy file", str(source))
-    try:
-        with zipfile.ZipFile(source) as archive:
-            text = archive.read(POLICY_MEMBER)
-    except zipfile.BadZipFile:
-        raise ValueError(f"{source}: not a design policy (not a zip archive); {_SAVE_HINT}") from None
-    except KeyError:
-        raise ValueError(
-            f"{source}: a zip archive without {POLICY_MEMBER}, not a design policy; {_SAVE_HINT}"
-        ) from None
-    record, scaling = _policy_record(source, text)
+    record, scaling = check_policy_file(source)
     sb3 = import_stable_baselines3()
     try:
         model = sb3.PPO.load(source, device="cpu")
     except Exception as error:  # whatever torch or pickle raise on a damaged archive
-        raise ValueError(
+        raise PolicyFileError(
             f"{source}: the PPO model inside cannot be loaded ({type(error).__name__}: {error})"
         ) from error
     return DesignPolicy(model, record.env_spec, scaling), record
+
+
+def check_policy_file(source: Path) -> tuple[PolicyRecord, ObservationScaling | None]:
+    """The record of a policy file and its observation scaling, after checking that the file has a saved
+    policy's layout: a zip archive of :data:`MODEL_MEMBERS` and :data:`POLICY_MEMBER`, whose ``data`` is
+    JSON. Nothing is unpickled.
+
+    Raises
+    ------
+    PolicyFileError
+        The file is missing, a folder, or not a policy file.
+    """
+    if source.is_dir():
+        raise PolicyFileError(f"{source}: is a folder; give a policy file")
+    try:
+        with zipfile.ZipFile(source) as archive:
+            members = {name: archive.read(name) for name in {"data", POLICY_MEMBER} & set(archive.namelist())}
+            names = set(archive.namelist())
+    except FileNotFoundError:
+        raise PolicyFileError(f"{source}: no such policy file; {_SAVE_HINT}") from None
+    except OSError as error:
+        raise PolicyFileError(f"{source}: cannot be read ({error.strerror or error})") from None
+    except zipfile.BadZipFile:
+        raise PolicyFileError(f"{source}: not a design policy (not a zip archive); {_SAVE_HINT}") from None
+    if POLICY_MEMBER not in names:
+        raise PolicyFileError(
+            f"{source}: a zip archive without {POLICY_MEMBER}, not a design policy; {_SAVE_HINT}"
+        )
+    record = _policy_record(source, members[POLICY_MEMBER])
+    missing, foreign = {"data", "policy.pth"} - names, names - MODEL_MEMBERS - {POLICY_MEMBER}
+    if missing or foreign:
+        lacks, extra = ", ".join(sorted(missing)) or "none", ", ".join(sorted(foreign)) or "none"
+        raise PolicyFileError(
+            f"{source}: not the layout of a saved design policy (missing: {lacks}; other members: {extra}); "
+            f"{_SAVE_HINT}"
+        )
+    try:
+        json.loads(members["data"])
+    except ValueError as error:  # JSONDecodeError and UnicodeDecodeError are ValueErrors
+        raise PolicyFileError(f"{source}: the model's data member is not JSON ({error})") from None
+    return record
 
 
 _SAVE_HINT = "save one with: catenary optimize PROBLEM --optimizer ppo --budget N --save-policy FILE"
@@ -651,5 +698,7 @@ def _policy_record(source: Path, text: bytes) -> tuple[PolicyRecord, Observation
             package_version=str(data.get("package_version", "")),
         )
     except (ValueError, KeyError, TypeError) as error:
-        raise ValueError(f"{source}: {POLICY_MEMBER} is damaged ({type(error).__name__}: {error})") from None
+        raise PolicyFileError(
+            f"{source}: {POLICY_MEMBER} is damaged ({type(error).__name__}: {error})"
+        ) from None
     return record, scaling

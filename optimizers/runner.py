@@ -31,12 +31,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from catenary_env.cli.progress import LOG_INTERVAL, ProgressDisplay
+
 from . import ga, nevergrad_adapters  # noqa: F401  (register the built-in optimisers)
 from .base import EvaluationRecord, OptimizationResult, Optimizer, get_optimizer
 from .evaluation import EvaluationBackend, make_backend
 from .problem import GridProblem, GridSpace, Outcome
 from .problem_registry import resolve_problem
-from .progress import LOG_INTERVAL, ProgressDisplay
 from .recorder import RunRecorder, open_run, options_json, package_version
 from .store import RunConfig, RunStore
 
@@ -122,7 +123,11 @@ def optimize(
         )
         run_id, resumed = open_run(run_store, config, resume, start_if_none)
         progress = ProgressDisplay(
-            f"{optimizer} on {space.name}", int(budget), quiet=quiet, interval=progress_interval
+            f"{optimizer} on {space.name}",
+            int(budget),
+            "simulations",
+            quiet=quiet,
+            interval=progress_interval,
         )
         recorder = RunRecorder(run_store, run_id, config, space, "simulation", progress, resumed)
         backend = stack.enter_context(make_backend(n_workers, scheduler))

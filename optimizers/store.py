@@ -40,6 +40,8 @@ from pathlib import Path
 from types import TracebackType
 from typing import NamedTuple
 
+from catenary_env.errors import CatenaryError
+
 from .base import EvaluationRecord
 from .problem import Outcome
 
@@ -92,7 +94,7 @@ CREATE INDEX evaluations_cache ON evaluations (problem, design_key, speed_kmh, f
 """
 
 
-class StoreError(RuntimeError):
+class StoreError(CatenaryError, RuntimeError):
     """The run store cannot be used: not a run store, another schema, or a run that cannot be resumed."""
 
 

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from catenary_env.errors import UnknownNameError
 from catenary_env.problems.grid import DesignGrid
 
 from .problem import Outcome, SimulateFunction
@@ -153,5 +154,7 @@ SYNTHETIC_PROBLEMS: dict[str, QuadraticProblem] = {
 def get_synthetic_problem(name: str) -> QuadraticProblem:
     """The synthetic problem ``name``; KeyError lists those available."""
     if name not in SYNTHETIC_PROBLEMS:
-        raise KeyError(f"unknown synthetic problem {name!r}; available: {', '.join(SYNTHETIC_PROBLEMS)}")
+        raise UnknownNameError(
+            f"unknown synthetic problem {name!r}; available: {', '.join(SYNTHETIC_PROBLEMS)}"
+        )
     return SYNTHETIC_PROBLEMS[name]

@@ -176,3 +176,48 @@ def test_physically_odd_input_is_warned_about(capsys, argv, warned):
     err = capsys.readouterr().err
     assert warned in err and "warning" in err
     assert status == 0  # a warning, not a refusal
+
+
+def _study_parsers():
+    from experiments.cli.experiment import STUDIES
+    from experiments.common import study_parser
+
+    for name, study in STUDIES.items():
+        module = importlib.import_module(f"experiments.{study.module}")
+        yield f"experiment {name}", study_parser(module, f"catenary experiment {name}")
+
+
+def test_every_option_of_every_command_and_study_is_explained():
+    parser, _ = cli.build_parser()
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    parsers = [*action.choices.items(), *_study_parsers()]
+    assert len(parsers) == 10 + 7  # the commands and the studies
+    for name, command in parsers:
+        for option in command._actions:
+            if not isinstance(option, argparse._HelpAction):
+                assert option.help and len(option.help) > 10, f"catenary {name} {option.dest}: no help"
+        assert "``" not in command.format_help(), name
+
+
+@pytest.mark.parametrize(
+    ("study", "module", "argv"),
+    [
+        ("design", "design_studies", ["--problems", "B1", "SW1", "--workers", "3", "--seed", "2", "--full"]),
+        ("optimizers", "optimizer_comparison", ["--optimizers", "ga", "random", "--store", "s.sqlite"]),
+        ("rl", "rl_studies", ["--problems", "SW1", "--workers", "2"]),
+        ("presag", "presag", ["--workers", "1"]),
+        ("validation", "validation", []),
+    ],
+)
+def test_catenary_experiment_takes_the_studys_own_options(tmp_path, monkeypatch, capsys, study, module, argv):
+    # Both entry points give the study the same settings; nothing is simulated (main is replaced).
+    studied = importlib.import_module(f"experiments.{module}")
+    configs = []
+    monkeypatch.setattr(studied, "main", lambda config: configs.append(config) or tmp_path)
+    monkeypatch.setattr(studied, "report", lambda folder: "report")
+    argv = [*argv, "--out", str(tmp_path)]
+    assert main(["experiment", study, *argv]) == 0
+    assert studied.cli(argv) == 0
+    assert configs[0] == configs[1] and configs[0].out == tmp_path
+    if argv[:-2]:  # the options beyond --out reached the study's settings
+        assert configs[0] != studied.Config(out=tmp_path)

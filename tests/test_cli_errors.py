@@ -1,4 +1,5 @@
-"""One error path: every broken input a user can give ends in exit status 2 and one line naming it.
+"""One error policy: every broken input a user can give ends in exit status 2 and one line naming it; any
+other exception is a bug and keeps its traceback, with a line asking to report it.
 
 Each case is a command line (``{tmp}`` is a folder of the test, ``{file}`` a file that the case's edit
 makes there) and a text the one-line message must contain: the file, field, row, option or address.
@@ -14,6 +15,7 @@ from pathlib import Path
 import pytest
 
 from catenary_env.cli import main
+from catenary_env.cli.exits import EXIT_BUG, REPORT_LINE
 from catenary_env.model.presets import preset_path
 from optimizers import optimize
 
@@ -150,6 +152,8 @@ CASES: list[tuple[str, list[str], str, Callable[[Path], None] | None]] = [
     ("seed-negative", [*OPT, "--seed", "-1"], "seed", None),
     ("unknown-problem", ["optimize", "nosuch", "--budget", "5"], "nosuch", None),
     ("workers-zero", [*OPT, "--workers", "0"], "workers", None),
+    ("max-evaluations-zero", [*OPT, "--max-evaluations", "0"], "--max-evaluations", None),
+    ("progress-every-negative", [*OPT, "--progress-every", "-1"], "--progress-every", None),
     ("speed-range-ga", [*OPT, "--speed-range", "200", "300"], "--speed-range", None),
     ("workers-and-scheduler", [*OPT, "--scheduler", "tcp://127.0.0.1:9"], "--workers", None),
     ("scheduler-bad-address", [*OPT[:-3], "--scheduler", "nowhere:::"], "nowhere:::", None),
@@ -167,6 +171,10 @@ CASES: list[tuple[str, list[str], str, Callable[[Path], None] | None]] = [
         _zip({"catenary_env_policy.json": '{"format": 1}'}),
     ),
     ("propose-folder", ["propose", "{tmp}", "--speed", "260"], "{tmp}", None),
+    # -- studies: their own options, checked before anything is simulated ---------------------------------
+    ("experiment-workers", ["experiment", "presag", "--workers", "0"], "--workers", None),
+    ("experiment-unknown-option", ["experiment", "validation", "--problems", "B1"], "--problems", None),
+    ("experiment-out-is-a-file", ["experiment", "validation", "--out", "{file}/x"], "--out", _text("x")),
     # -- run stores ----------------------------------------------------------------------------------------
     ("store-is-folder", [*OPT, "--store", "{tmp}"], "{tmp}", None),
     ("store-missing-folder", [*OPT, "--store", "{tmp}/no/runs.sqlite"], "{tmp}/no", None),
@@ -213,3 +221,59 @@ def test_broken_input_ends_in_one_line_naming_it(tmp_path, capsys, monkeypatch, 
 
 def test_there_are_at_least_40_cases():
     assert len(CASES) >= 40
+
+
+# -- bugs -------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "error",
+    [
+        ZeroDivisionError("division by zero"),
+        ValueError("an internal value"),
+        KeyError("x"),
+        OSError(5, "I/O"),
+    ],
+    ids=["ZeroDivisionError", "ValueError", "KeyError", "OSError"],
+)
+def test_an_internal_error_keeps_its_traceback_and_asks_to_report_it(monkeypatch, capsys, error):
+    # Deep inside a command (the static shape of ``catenary static``), an exception that is not one of the
+    # project's user errors: a bug, whatever its type, not a one-line "user error".
+    import catenary_env.pipeline
+
+    def broken(*args, **kwargs):
+        raise error
+
+    monkeypatch.setattr(catenary_env.pipeline, "solve_static", broken)
+    status = main(["static", "benchmark", "--fidelity", "test"])
+    err = capsys.readouterr().err
+    assert status == EXIT_BUG != 2
+    assert err.startswith("Traceback (most recent call last):")
+    assert f"{type(error).__name__}: " in err and "in broken" in err
+    assert err.splitlines()[-1] == f"catenary static: {REPORT_LINE}"
+    assert "please report it" in REPORT_LINE
+    with pytest.raises(type(error)):  # --debug: raised as it is, for a debugger
+        main(["--debug", "static", "benchmark", "--fidelity", "test"])
+
+
+def test_a_user_error_is_one_of_the_projects_own_types():
+    # The one-line errors are CatenaryError subclasses; those that replaced a ValueError stay one.
+    from catenary_env.errors import CatenaryError, UsageError
+    from catenary_env.model.design import DesignError
+    from catenary_env.statics.shape_finding import ShapeFindingError
+    from optimizers.store import StoreError
+
+    for error in (DesignError, ShapeFindingError, StoreError, UsageError):
+        assert issubclass(error, CatenaryError)
+    assert issubclass(DesignError, ValueError) and issubclass(UsageError, ValueError)
+    assert not issubclass(ValueError, CatenaryError)
+
+
+def test_an_os_error_of_a_file_the_user_named_becomes_a_user_error_naming_it():
+    from catenary_env.errors import CatenaryError, UserFileError
+
+    error = UserFileError.from_os_error(
+        FileNotFoundError(2, "No such file or directory", "/no/such"), "--out"
+    )
+    assert str(error) == "--out /no/such: No such file or directory"
+    assert isinstance(error, CatenaryError) and isinstance(error, OSError)

@@ -112,7 +112,7 @@ def test_report_needs_only_the_data(quick_study, monkeypatch):
 
 
 def test_catenary_report_gathers_the_studies(quick_study, capsys):
-    from experiments.cli import build_report
+    from experiments.cli.report import build_report
 
     config, folder = quick_study
     path = build_report(config.out)

@@ -4,11 +4,14 @@ The modules are read with :mod:`ast`, not imported, so the test needs no optiona
 ``import`` counts, also those inside functions and under ``TYPE_CHECKING``: an import deferred to run
 time is still a dependency. The layers, lowest first::
 
-    model < fem < statics < dynamics < analysis < pipeline < problems < envs < catenary_env < cli
-          < optimizers < experiments
+    model (and errors) < fem < statics < dynamics < analysis < pipeline < problems < envs < catenary_env
+          < cli < optimizers < experiments
 
 A module may import modules of its own layer or of a lower one; the package ``catenary_env`` itself
 (its ``__init__``, which re-exports the pipeline) sits above the environments and below the command line.
+The project's errors (``catenary_env.errors``) sit at the bottom, with the model, so that every layer raises
+them. The command line (``catenary_env.cli``) is the simulator's edge: nothing in the simulator imports it,
+and it imports neither the optimisers nor the studies (their commands plug in through entry points).
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("catenary_env", "optimizers", "experiments")
 
 LAYERS = (
-    ("catenary_env.model",),
+    ("catenary_env.model", "catenary_env.errors"),
     ("catenary_env.fem",),
     ("catenary_env.statics",),
     ("catenary_env.dynamics",),
@@ -32,7 +35,7 @@ LAYERS = (
     ("catenary_env.problems",),
     ("catenary_env.envs",),
     ("catenary_env",),  # the package's __init__: the re-exported API
-    ("catenary_env.cli", "catenary_env.cli_evaluate", "catenary_env.plots"),
+    ("catenary_env.cli", "catenary_env.plots"),
     ("optimizers",),
     ("experiments",),
 )
@@ -163,6 +166,30 @@ def test_no_module_imports_a_higher_layer() -> None:
         if layer(target) > layer(module)
     ]
     assert not upward, "imports that point up the pipeline:\n" + "\n".join(upward)
+
+
+def test_the_command_line_is_the_simulators_edge() -> None:
+    inward = [
+        f"{MODULES[module].relative_to(ROOT)}:{line}: {module} imports {target}"
+        for module, edges in import_graph().items()
+        for target, line in edges.items()
+        if module.startswith("catenary_env.")
+        and not _in(module, "catenary_env.cli")
+        and _in(target, "catenary_env.cli")
+    ]
+    assert not inward, "the simulator imports its command line:\n" + "\n".join(inward)
+    outward = [
+        f"{module} imports {target}"
+        for module, edges in import_graph().items()
+        if _in(module, "catenary_env.cli")
+        for target in edges
+        if target.partition(".")[0] in ("optimizers", "experiments")
+    ]
+    assert not outward, "the command line imports the packages that plug into it:\n" + "\n".join(outward)
+
+
+def _in(module: str, package: str) -> bool:
+    return module == package or module.startswith(package + ".")
 
 
 def test_no_import_cycle() -> None:

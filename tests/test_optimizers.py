@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from conftest import requires
 
+from catenary_env.cli.progress import ProgressDisplay
 from optimizers import OPTIMIZERS, GridSpace, Outcome, RunStore, StoreError, optimize
 from optimizers.base import OptimizerSpec, register_optimizer
 from optimizers.ga import (
@@ -31,7 +32,6 @@ from optimizers.ga import (
     stochastic_uniform,
 )
 from optimizers.nevergrad_adapters import NevergradOptimizer, NGOpt, ngopt_fault
-from optimizers.progress import ProgressDisplay
 from optimizers.synthetic import QuadraticProblem, get_synthetic_problem, simulate_quadratic
 
 
@@ -421,8 +421,8 @@ class _Terminal(io.StringIO):
 
 def test_progress_display_shows_best_sigma_on_a_terminal():
     terminal = _Terminal()
-    display = ProgressDisplay("ga on B1", budget=100, stream=terminal)
-    display.update(40, 55, 23.456, force=True)
+    display = ProgressDisplay("ga on B1", 100, "simulations", stream=terminal)
+    display.update(40, "55 evaluations, best sigma 23.456 N", force=True)
     display.finish("stopped (budget)")
     assert "40/100 simulations" in terminal.getvalue() and "23.456 N" in terminal.getvalue()
     assert terminal.getvalue().startswith("\r")
@@ -430,23 +430,23 @@ def test_progress_display_shows_best_sigma_on_a_terminal():
 
 def test_progress_display_writes_plain_periodic_lines_to_a_log():
     log = io.StringIO()
-    display = ProgressDisplay("ga on B1", budget=100, stream=log, interval=0.0)
-    display.update(40, 55, 23.456)
-    display.update(60, 70, 21.0)
+    display = ProgressDisplay("ga on B1", 100, "simulations", stream=log, interval=0.0)
+    display.update(40, "55 evaluations, best sigma 23.456 N")
+    display.update(60, "70 evaluations, best sigma 21.000 N")
     lines = log.getvalue().splitlines()
     assert len(lines) == 2 and "\r" not in log.getvalue()
     assert lines[1].startswith("ga on B1: 60/100 simulations, 70 evaluations, best sigma 21.000 N")
     assert "s elapsed" in lines[1] and "simulations/s" in lines[1]
     slow = io.StringIO()
-    ProgressDisplay("x", 10, stream=slow, interval=3600.0).update(1, 1, None)
+    ProgressDisplay("x", 10, "simulations", stream=slow, interval=3600.0).update(1)
     assert slow.getvalue() == ""  # not yet time for a line
 
 
 def test_quiet_silences_the_terminal_line_and_the_log_lines():
     terminal, log = _Terminal(), io.StringIO()
     for stream in (terminal, log):
-        display = ProgressDisplay("x", 10, quiet=True, stream=stream, interval=0.0)
-        display.update(1, 1, None, force=True)
+        display = ProgressDisplay("x", 10, "simulations", quiet=True, stream=stream, interval=0.0)
+        display.update(1, "1 evaluation", force=True)
         display.note("resuming")
         display.finish("stopped")
     assert terminal.getvalue() == log.getvalue() == ""

@@ -15,8 +15,9 @@ from pathlib import Path
 import pytest
 from conftest import requires
 
+from catenary_env.cli import main
 from optimizers import EvaluationRecord, optimize
-from optimizers.cli import add_arguments, add_parser, run
+from optimizers.cli.optimize import add_arguments, add_parser, run
 
 REPO = Path(__file__).resolve().parents[1]
 PROBLEM = "synthetic-quadratic-slow"  # 5 ms an evaluation: a run lasts long enough to be killed
@@ -103,12 +104,17 @@ def test_cli_runs_and_prints_json(tmp_path, capsys):
 def test_cli_refuses_a_corrupt_store(tmp_path, capsys):
     store = tmp_path / "runs.sqlite"
     store.write_bytes(b"\x89PNG not a database at all" * 100)
-    assert run(_parse(["synthetic-quadratic", "--budget", "5", "--store", str(store), "--workers", "1"])) == 2
+    assert (
+        main(["optimize", "synthetic-quadratic", "--budget", "5", "--store", str(store), "--workers", "1"])
+        == 2
+    )
     assert "not an SQLite database" in capsys.readouterr().err
 
 
 def test_cli_reports_unknown_problem(capsys):
-    assert run(_parse(["no-such-problem", "--budget", "5", "--store", ":memory:", "--workers", "1"])) == 2
+    assert (
+        main(["optimize", "no-such-problem", "--budget", "5", "--store", ":memory:", "--workers", "1"]) == 2
+    )
     assert "no-such-problem" in capsys.readouterr().err
 
 

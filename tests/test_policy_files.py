@@ -20,6 +20,7 @@ from optimizers.catenary_adapter import catenary_problem  # noqa: E402
 from optimizers.rl import (  # noqa: E402
     POLICY_MEMBER,
     EnvSpec,
+    PolicyFileError,
     PPOOptions,
     design_for_speed,
     load_policy,
@@ -117,6 +118,25 @@ def test_a_file_that_is_no_policy_is_refused_naming_it(tmp_path, make, says):
     path = tmp_path / "policy.zip"
     make(path)
     with pytest.raises(ValueError, match=says) as caught:
+        load_policy(path)
+    assert str(path) in str(caught.value)
+
+
+def test_a_file_with_other_members_is_refused_before_stable_baselines3_reads_it(
+    trained, tmp_path, monkeypatch
+):
+    # A genuine policy file with one more member (a pickle, say): refused on its layout, and
+    # stable-baselines3's loader (which unpickles) is never reached.
+    policy, result = trained
+    path = save_policy(policy, tmp_path / "policy.zip", PROBLEM, result)
+    with zipfile.ZipFile(path, "a") as archive:
+        archive.writestr("payload.pkl", b"\x80\x04N.")
+    import optimizers.rl
+
+    monkeypatch.setattr(
+        optimizers.rl, "import_stable_baselines3", lambda: pytest.fail("the loader was reached")
+    )
+    with pytest.raises(PolicyFileError, match="other members: payload.pkl") as caught:
         load_policy(path)
     assert str(path) in str(caught.value)
 

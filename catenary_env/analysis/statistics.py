@@ -8,6 +8,7 @@ the central spans of the section, so that the entry and exit transients do not c
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING
 
@@ -58,6 +59,38 @@ class ContactStatistics:
 
     def as_dict(self) -> dict[str, float]:
         return asdict(self)
+
+    def text_lines(self, indent: str = "  ") -> list[str]:
+        """The statistics as text, one per line with its name and unit (the support uplift in mm), as the
+        command line prints them."""
+        lines = []
+        for key, label, unit, scale in STATISTICS_ROWS:
+            value = scale * getattr(self, key)
+            text = f"{value:10.3f}" if math.isfinite(value) else f"{value!s:>10}"
+            lines.append(f"{indent}{label:<26} {text} {unit}")
+        return lines
+
+
+STATISTICS_ROWS = (
+    ("mean", "mean contact force Fm", "N", 1.0),
+    ("std", "standard deviation σ", "N", 1.0),
+    ("std_over_mean", "σ / Fm", "-", 1.0),
+    ("statistical_max", "statistical max Fm + 3σ", "N", 1.0),
+    ("statistical_min", "statistical min Fm - 3σ", "N", 1.0),
+    ("actual_max", "actual max", "N", 1.0),
+    ("actual_min", "actual min", "N", 1.0),
+    ("contact_loss_percent", "contact loss", "%", 1.0),
+    ("max_support_uplift", "max uplift at a support", "mm", 1000.0),
+)
+"""Each statistic's field, label, unit and scale from SI in :meth:`ContactStatistics.text_lines`."""
+
+STATISTICS_UNITS = {
+    "statistics.mean, std, statistical_max, statistical_min, actual_max, actual_min": "N",
+    "statistics.std_over_mean": "1",
+    "statistics.contact_loss_percent": "%",
+    "statistics.max_support_uplift": "m",
+}
+"""Units of the statistics in the command line's JSON output (SI, as :meth:`ContactStatistics.as_dict`)."""
 
 
 def lowpass(force: np.ndarray, time_step: float, cutoff: float = CUTOFF_HZ) -> np.ndarray:

@@ -13,10 +13,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from ..errors import CatenaryError
 from .options import CHOICES, ModellingOptions
 
 
-class DefinitionError(ValueError):
+class DefinitionError(CatenaryError, ValueError):
     """An invalid catenary or pantograph definition; the message names the field and the allowed range."""
 
 

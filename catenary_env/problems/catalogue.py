@@ -14,6 +14,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..errors import UnknownNameError
 from ..pipeline import Evaluation, Fidelity
 from .design_problem import DesignProblem
 from .grid import HEIGHT_STEP, POSITION_STEP
@@ -43,7 +44,7 @@ def get_problem(name: str) -> DesignProblem:
         by_lower = {known.lower(): known for known in PROBLEMS}
         close = difflib.get_close_matches(str(name).lower(), list(by_lower), n=1)
         hint = f" (did you mean {by_lower[close[0]]!r}?)" if close else ""
-        raise KeyError(f"unknown design problem {name!r}{hint}; available: {', '.join(PROBLEMS)}")
+        raise UnknownNameError(f"unknown design problem {name!r}{hint}; available: {', '.join(PROBLEMS)}")
     return PROBLEMS[name]
 
 

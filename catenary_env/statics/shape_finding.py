@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from ..errors import CatenaryError
 from ..fem.assembly import Assembled, SparseScatter, assemble, dlength_coordinates, matrix_coordinates
 from ..fem.bar import bar_state
 from ..fem.layout import CONTACT, MESSENGER, STITCH, Layout
@@ -34,8 +35,8 @@ from ..fem.track_order import TrackOrderSolver
 from ..model.design import GRAVITY
 
 
-class ShapeFindingError(RuntimeError):
-    """Shape-finding did not converge; the message gives the residual."""
+class ShapeFindingError(CatenaryError, RuntimeError):
+    """Shape-finding did not converge: the design has no static shape; the message gives the residual."""
 
 
 @dataclass(frozen=True)

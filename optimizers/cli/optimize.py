@@ -1,14 +1,12 @@
-"""``catenary optimize``: run an optimiser on a design problem from the command line; ``catenary propose``:
-the designs of a saved PPO policy.
+"""``catenary optimize``: run an optimiser on a design problem from the command line.
 
     catenary optimize PROBLEM --optimizer NAME --budget N [--seed S] [--speed KMH] [--fidelity study|test]
                       [--store PATH] [--resume] [--workers N] [--scheduler tcp://HOST:PORT] [--json]
                       [--speed-range LO HI] [--save-policy FILE]
-    catenary propose POLICY --speed KMH [KMH ...] [--no-evaluate] [--fidelity study|test] [--json]
 
 ``optimize`` is also available as ``python -m optimizers PROBLEM ...``. :func:`add_parser` adds the
-sub-command to the ``catenary`` parser and :func:`run` executes it; bad input exits with status 2 and a
-message.
+sub-command to the ``catenary`` parser and :func:`run` executes it; bad input is refused with one line
+(``catenary_env/cli/exits.py``).
 
 A ppo run saves its trained policy: with ``--save-policy FILE`` there, else beside the run store, as
 ``<store>.ppo-<problem>-run<ID>.zip`` (a run store ``:memory:`` keeps none unless ``--save-policy`` is
@@ -21,27 +19,18 @@ import argparse
 import json
 import os
 import sys
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from catenary_env.cli_errors import UsageError, check_output_path, interruption, print_error
+from catenary_env.cli.exits import interruption
+from catenary_env.cli.paths import check_output_path
+from catenary_env.cli.progress import LOG_INTERVAL
+from catenary_env.errors import MissingDependency, UsageError
 
-from . import ga, nevergrad_adapters  # noqa: F401  (register the built-in optimisers)
-from .base import OPTIMIZERS, OptimizationResult
-from .cli_runs import add_runs_parser, list_runs
-from .progress import LOG_INTERVAL
-from .store import StoreError
+from .. import ga, nevergrad_adapters  # noqa: F401  (register the built-in optimisers)
+from ..base import OPTIMIZERS, OptimizationResult
 
-__all__ = [
-    "DEFAULT_STORE",
-    "add_arguments",
-    "add_commands",
-    "add_parser",
-    "add_propose_parser",
-    "propose",
-    "run",
-]
+__all__ = ["DEFAULT_STORE", "DESCRIPTION", "add_arguments", "add_parser", "run"]
 
 DEFAULT_STORE = "catenary-runs.sqlite"
 """Run store used when ``--store`` is not given (in the current directory)."""
@@ -181,30 +170,21 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     return parser
 
 
-def add_commands(subparsers: Any) -> dict[str, Callable[[argparse.Namespace], int]]:
-    """Add ``catenary optimize``, ``propose`` and ``runs``: the ``catenary_env.commands`` entry point of this
-    package."""
-    add_parser(subparsers)
-    add_propose_parser(subparsers)
-    add_runs_parser(subparsers, DEFAULT_STORE)
-    return {"optimize": run, "propose": propose, "runs": list_runs}
-
-
 def run(args: argparse.Namespace) -> int:
-    """Execute ``optimize``; return the exit status (0; 2 for bad input; 130 or 143 when interrupted)."""
+    """Execute ``optimize``; return the exit status (0; 130 or 143 when interrupted, saying how to resume)."""
+    if args.max_evaluations is not None and args.max_evaluations < 1:
+        raise UsageError(f"--max-evaluations {args.max_evaluations}: must be at least 1 evaluation")
+    if not args.progress_every >= 0.0:
+        raise UsageError(f"--progress-every {args.progress_every}: must be a number of seconds >= 0")
+    if args.save_policy is not None:
+        if args.optimizer not in RL_OPTIMIZERS:
+            raise UsageError(f"--save-policy is for --optimizer ppo, not {args.optimizer}")
+        check_output_path(args.save_policy, "--save-policy")
     try:
-        if args.save_policy is not None:
-            if args.optimizer not in RL_OPTIMIZERS:
-                raise UsageError(f"--save-policy is for --optimizer ppo, not {args.optimizer}")
-            check_output_path(args.save_policy, "--save-policy")
         if args.optimizer in RL_OPTIMIZERS:
             result, policy_path = _run_rl(args)
         else:
             result, policy_path = _run_optimizer(args), None
-    except (StoreError, ImportError, ValueError, TypeError, KeyError, OSError) as error:
-        if getattr(args, "debug", False):
-            raise
-        return print_error("optimize", error)
     except KeyboardInterrupt as error:
         how, status = interruption(error)
         print(
@@ -233,10 +213,10 @@ RESULT_UNITS = {
 
 
 def _run_optimizer(args: argparse.Namespace) -> OptimizationResult:
-    from .runner import optimize
+    from ..runner import optimize
 
     if args.speed_range is not None:
-        raise ValueError("--speed-range is for --optimizer ppo; the other optimisers design for one --speed")
+        raise UsageError("--speed-range is for --optimizer ppo; the other optimisers design for one --speed")
     if args.scheduler and args.workers is not None:
         raise UsageError(
             f"--workers {args.workers} with --scheduler {args.scheduler}: the cluster's workers run the "
@@ -252,8 +232,8 @@ def _run_optimizer(args: argparse.Namespace) -> OptimizationResult:
 
 
 def _run_rl(args: argparse.Namespace) -> tuple[OptimizationResult, Path | None]:
-    from .catenary_adapter import catenary_problem
-    from .rl import EnvSpec, save_policy, train_design_policy
+    from ..catenary_adapter import catenary_problem
+    from ..rl import EnvSpec, save_policy, train_design_policy
 
     if args.scheduler or (args.workers or 1) > 1:
         print(
@@ -263,7 +243,9 @@ def _run_rl(args: argparse.Namespace) -> tuple[OptimizationResult, Path | None]:
     try:
         from catenary_env.envs import register_envs
     except ImportError as error:
-        raise ImportError(f"ppo needs the design envs: pip install catenary-env[gym] ({error})") from error
+        raise MissingDependency(
+            f"ppo needs the design envs: pip install catenary-env[gym] ({error})"
+        ) from error
     register_envs()
     problem = catenary_problem(args.problem)
     speed_range = tuple(args.speed_range) if args.speed_range is not None else None
@@ -304,172 +286,3 @@ def _summary(result: OptimizationResult, store: str, policy: Path | None = None)
     if policy is not None:
         lines.append(f"policy saved to {policy}: catenary propose {policy} --speed KMH gives its design")
     return "\n".join(lines)
-
-
-# -- catenary propose ------------------------------------------------------------------------------------
-
-
-def add_propose_parser(subparsers: Any) -> argparse.ArgumentParser:
-    """Add ``propose`` to the sub-commands of the ``catenary`` command."""
-    parser: argparse.ArgumentParser = subparsers.add_parser(
-        "propose",
-        help="the design a saved PPO policy proposes at a speed, and its sigma",
-        description="Load a PPO design policy saved by 'catenary optimize PROBLEM --optimizer ppo' and print "
-        "the design it proposes at each speed; unless --no-evaluate, simulate each design at its speed, "
-        "with the problem's reference design (the level contact wire) for comparison. Load only policy "
-        "files you trust: loading one unpickles parts of it, as stable-baselines3 does.",
-    )
-    parser.add_argument("policy", metavar="POLICY", help="the policy file (a zip saved by catenary optimize)")
-    parser.add_argument(
-        "--speed",
-        type=float,
-        nargs="+",
-        required=True,
-        metavar="KMH",
-        help="train speeds, km/h, one design each (within the policy's training speeds for a meaningful "
-        "design)",
-    )
-    parser.add_argument(
-        "--no-evaluate",
-        action="store_true",
-        help="print the designs only, without simulating them",
-    )
-    parser.add_argument(
-        "--fidelity",
-        choices=("study", "test"),
-        default=None,
-        help="the model the designs are simulated on (default: the one the policy was trained on)",
-    )
-    parser.add_argument(
-        "--json",
-        action="store_true",
-        help="print one JSON object: the policy's record and, per speed, the design (m) and its sigma (N)",
-    )
-    return parser
-
-
-def propose(args: argparse.Namespace) -> int:
-    """Execute ``propose``; return the exit status (0; 2 for bad input)."""
-    try:
-        report = _proposals(args)
-    except (ImportError, ValueError, TypeError, KeyError, OSError) as error:
-        if getattr(args, "debug", False):
-            raise
-        return print_error("propose", error)
-    except KeyboardInterrupt as error:
-        how, status = interruption(error)
-        print(f"\ncatenary propose: {how}", file=sys.stderr)
-        return status
-    print(json.dumps(report) if args.json else _proposal_table(report))
-    return 0
-
-
-def _proposals(args: argparse.Namespace) -> dict[str, Any]:
-    """The policy's record and its design at each speed (simulated unless --no-evaluate)."""
-    import dataclasses
-
-    from catenary_env.model.design import check_speed
-
-    from .problem_registry import resolve_problem
-    from .rl import design_for_speed, load_policy
-
-    policy, record = load_policy(args.policy)
-    problem = resolve_problem(record.problem)
-    _warn_if_stale(args.policy, record, problem)
-    catenary = _catenary_definition(record.problem)
-    for speed in args.speed:
-        if catenary is not None:
-            check_speed(catenary, speed / 3.6)
-        if not _trained_for(record, speed):
-            print(
-                f"catenary propose: warning: {speed:g} km/h is outside the policy's training speeds "
-                f"({record.speeds}): its design there is an extrapolation",
-                file=sys.stderr,
-            )
-    fidelity = args.fidelity or record.env_spec.fidelity
-    proposals = []
-    for speed in args.speed:
-        x = design_for_speed(policy, problem, speed)
-        entry: dict[str, Any] = {
-            "speed_kmh": speed,
-            "design": dict(zip(problem.variable_names, x.tolist(), strict=True)),
-        }
-        if not args.no_evaluate:
-            outcome = problem.simulate(tuple(float(v) for v in x), float(speed), fidelity)
-            entry.update(feasible=outcome.feasible, sigma=outcome.sigma, reason=outcome.reason)
-            entry["reference_sigma"] = _reference_sigma(record.problem, speed, fidelity)
-        proposals.append(entry)
-    policy_record = dataclasses.asdict(record)
-    return {
-        "policy": str(args.policy),
-        "record": policy_record,
-        "fidelity": None if args.no_evaluate else fidelity,
-        "proposals": proposals,
-        "units": {"speed_kmh": "km/h", "design": "m", "sigma, reference_sigma": "N"},
-    }
-
-
-def _catenary_definition(name: str) -> Any:
-    """The catenary of a catenary design problem (for its speed limit), or None for another problem."""
-    from catenary_env.problems import PROBLEMS
-
-    return PROBLEMS[name].catenary_definition if name in PROBLEMS else None
-
-
-def _reference_sigma(name: str, speed: float, fidelity: str) -> float | None:
-    """σ of a catenary problem's reference design at the speed, N (None for another problem)."""
-    from catenary_env.problems import PROBLEMS
-
-    if name not in PROBLEMS:
-        return None
-    statistics = PROBLEMS[name].reference_evaluation(speed, fidelity).statistics
-    return None if statistics is None else float(statistics.std)
-
-
-def _trained_for(record: Any, speed: float) -> bool:
-    spec = record.env_spec
-    if spec.speed_range is not None:
-        return spec.speed_range[0] <= speed <= spec.speed_range[1]
-    return spec.speed_kmh is None or abs(speed - spec.speed_kmh) < 1e-9
-
-
-def _warn_if_stale(path: str, record: Any, problem: Any) -> None:
-    now = str(getattr(problem, "model_fingerprint", ""))
-    if record.model_fingerprint and now and record.model_fingerprint != now:
-        print(
-            f"catenary propose: warning: {path} was trained on {record.problem} with model fingerprint "
-            f"{record.model_fingerprint}; the problem's model is now {now} (an edited preset or a new "
-            "simulator revision): its designs were learnt on the old model",
-            file=sys.stderr,
-        )
-
-
-def _proposal_table(report: dict[str, Any]) -> str:
-    record = report["record"]
-    spec = record["env_spec"]
-    trained = (
-        f"{spec['speed_range'][0]:g}-{spec['speed_range'][1]:g} km/h"
-        if spec["speed_range"] is not None
-        else f"{spec['speed_kmh']:g} km/h"
-    )
-    lines = [
-        f"{report['policy']}: ppo policy for {record['problem']}, trained on {trained} ({spec['fidelity']} "
-        f"fidelity, budget {record['budget']}, seed {record['seed']}, run {record['run_id']})"
-    ]
-    for entry in report["proposals"]:
-        lines.append(f"at {entry['speed_kmh']:g} km/h:")
-        lines.extend(f"  {name} = {value:.3f} m" for name, value in entry["design"].items())
-        if "feasible" in entry:
-            lines.append(_sigma_line(entry, report["fidelity"]))
-    return "\n".join(lines)
-
-
-def _sigma_line(entry: dict[str, Any], fidelity: str) -> str:
-    if not entry["feasible"]:
-        return f"  infeasible ({fidelity} fidelity): {entry['reason']}"
-    line = f"  sigma = {entry['sigma']:.3f} N ({fidelity} fidelity)"
-    reference = entry.get("reference_sigma")
-    if reference:
-        change = 100.0 * (entry["sigma"] - reference) / reference
-        line += f"; reference design (level contact wire): {reference:.3f} N, {change:+.1f} %"
-    return line

@@ -1,4 +1,5 @@
-"""``catenary evaluate``: simulate one design of a design problem, given in its physical variables.
+"""``catenary evaluate PROBLEM --x V1 V2 ...``: simulate one design of a design problem, given in its physical
+variables.
 
 Examples
 --------
@@ -11,22 +12,19 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 from typing import Any
 
 import numpy as np
 
-from .model.design import check_speed
-from .pipeline import FIDELITIES, Evaluation
-from .problems import PROBLEMS, DesignProblem
-
-EXIT_OK = 0
-EXIT_USAGE = 2
-"""Exit status of a bad command line (as argparse's own errors)."""
+from ..analysis.statistics import STATISTICS_UNITS, ContactStatistics
+from ..errors import UsageError
+from ..model.design import check_speed
+from ..pipeline import FIDELITIES, Evaluation
+from ..problems import PROBLEMS, DesignProblem
 
 
-def add_parser(subparsers: Any) -> argparse.ArgumentParser:
-    """Add the ``evaluate`` command to a main parser's subparsers; ``run`` is set as its ``handler``."""
+def add_parser(subparsers: Any) -> None:
+    """Add ``evaluate`` to the sub-commands of ``catenary``."""
     table = "; ".join(f"{name}: {' '.join(p.variables)}" for name, p in PROBLEMS.items())
     parser = subparsers.add_parser(
         "evaluate",
@@ -57,38 +55,36 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "mesh; for quick checks, not for design conclusions)",
     )
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
-    parser.set_defaults(handler=run)
-    return parser
 
 
 def run(args: argparse.Namespace) -> int:
-    """Evaluate the design; 0 once printed (feasible or not), 2 for a bad command line."""
+    """Evaluate the design and print it (feasible or not); 0. Bad variables or speed are refused before any
+    solve."""
     problem = PROBLEMS[args.problem]
-    try:  # bad variables or speed are refused before any solve; errors of the solve itself propagate
-        x = _checked_variables(problem, list(args.x))
-        check_speed(problem.catenary_definition, args.speed / 3.6)
-    except ValueError as error:  # DesignError is a ValueError
-        print(f"catenary evaluate: error: {error}", file=sys.stderr)
-        return EXIT_USAGE
+    x = _checked_variables(problem, list(args.x))
+    check_speed(problem.catenary_definition, args.speed / 3.6)
     evaluation = problem.evaluate(x, args.speed, args.fidelity)
     record = _record(problem, x, list(args.x), args.speed, args.fidelity, evaluation)
     if args.json:
         print(json.dumps(_finite_or_null(record), allow_nan=False))
     else:
-        print(_table(record))
-    return EXIT_OK
+        print(_table(record, evaluation.statistics))
+    return 0
 
 
 def _checked_variables(problem: DesignProblem, values: list[float]) -> np.ndarray:
+    bounds = ", ".join(
+        f"{n} in [{lo:g}, {hi:g}] m"
+        for n, lo, hi in zip(problem.variables, problem.lower, problem.upper, strict=True)
+    )
     if len(values) != problem.n_variables:
-        bounds = ", ".join(
-            f"{n} in [{lo:g}, {hi:g}] m"
-            for n, lo, hi in zip(problem.variables, problem.lower, problem.upper, strict=True)
-        )
-        raise ValueError(
+        raise UsageError(
             f"--x: {problem.name} takes {problem.n_variables} values ({bounds}), got {len(values)}"
         )
-    return problem.check_variables(values)
+    try:
+        return problem.check_variables(values)
+    except ValueError as error:  # the problem's own check of the values just given
+        raise UsageError(f"--x: {error}") from error
 
 
 def _record(
@@ -121,10 +117,7 @@ UNITS = {
     "speed_kmh": "km/h",
     "variables, dropper_lengths": "m",
     "uplift_force, dropper_forces": "N",
-    "statistics.mean, std, statistical_max, statistical_min, actual_max, actual_min": "N",
-    "statistics.std_over_mean": "1",
-    "statistics.contact_loss_percent": "%",
-    "statistics.max_support_uplift": "m",
+    **STATISTICS_UNITS,
     "wall_time": "s",
 }
 """Units of the numbers in ``catenary evaluate --json`` (SI; the table shows the support uplift in mm)."""
@@ -141,39 +134,14 @@ def _finite_or_null(value: Any) -> Any:
     return value
 
 
-_ROWS = (
-    ("mean", "mean contact force Fm", "N", 1.0),
-    ("std", "standard deviation σ", "N", 1.0),
-    ("std_over_mean", "σ / Fm", "-", 1.0),
-    ("statistical_max", "statistical max Fm + 3σ", "N", 1.0),
-    ("statistical_min", "statistical min Fm - 3σ", "N", 1.0),
-    ("actual_max", "actual max", "N", 1.0),
-    ("actual_min", "actual min", "N", 1.0),
-    ("contact_loss_percent", "contact loss", "%", 1.0),
-    ("max_support_uplift", "max uplift at a support", "mm", 1000.0),
-)
-
-
-def _table(record: dict[str, Any]) -> str:
+def _table(record: dict[str, Any], statistics: ContactStatistics | None) -> str:
     lines = [f"problem {record['problem']} at {record['speed_kmh']:g} km/h ({record['fidelity']} fidelity)"]
     lines += [f"  {name:<8} = {value:.3f} m" for name, value in record["variables"].items()]
     if record["rounded_to_grid"]:
         lines.append("  (variables rounded to the grid: heights 1 mm, positions 1 cm)")
     lines.append(f"feasible: {'yes' if record['feasible'] else 'no: ' + record['reason']}")
     lines.append(f"  {'pantograph uplift force':<26} {record['uplift_force']:10.2f} N")
-    statistics = record["statistics"] or {}
-    for key, label, unit, scale in _ROWS:
-        if key in statistics:
-            value = statistics[key] * scale
-            text = f"{value:10.3f}" if math.isfinite(value) else f"{value!s:>10}"
-            lines.append(f"  {label:<26} {text} {unit}")
+    if statistics is not None:
+        lines += statistics.text_lines()
     lines.append(f"  {'wall time':<26} {record['wall_time']:10.2f} s")
     return "\n".join(lines)
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Run ``evaluate`` alone (for testing before it is wired into ``catenary``)."""
-    parser = argparse.ArgumentParser(prog="catenary")
-    add_parser(parser.add_subparsers(dest="command", required=True))
-    args = parser.parse_args(argv)
-    return int(args.handler(args))

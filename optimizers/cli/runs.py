@@ -14,16 +14,17 @@ import json
 from pathlib import Path
 from typing import Any
 
-from catenary_env.cli_errors import UsageError, print_error
+from catenary_env.errors import UsageError
 
-from .store import RunStore, StoreError
+from ..store import RunStore
+from .optimize import DEFAULT_STORE
 
-__all__ = ["add_runs_parser", "list_runs"]
+__all__ = ["add_parser", "run"]
 
 COLUMNS = ("run", "optimizer", "problem", "seed", "speed", "fidelity", "simulations", "best σ (N)", "status")
 
 
-def add_runs_parser(subparsers: Any, default_store: str) -> argparse.ArgumentParser:
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``runs`` to the sub-commands of the ``catenary`` command."""
     parser: argparse.ArgumentParser = subparsers.add_parser(
         "runs",
@@ -34,7 +35,7 @@ def add_runs_parser(subparsers: Any, default_store: str) -> argparse.ArgumentPar
         "still running.",
     )
     parser.add_argument(
-        "--store", default=default_store, metavar="PATH", help=f"the run store (default: ./{default_store})"
+        "--store", default=DEFAULT_STORE, metavar="PATH", help=f"the run store (default: ./{DEFAULT_STORE})"
     )
     parser.add_argument(
         "--json",
@@ -45,17 +46,12 @@ def add_runs_parser(subparsers: Any, default_store: str) -> argparse.ArgumentPar
     return parser
 
 
-def list_runs(args: argparse.Namespace) -> int:
-    """Execute ``runs``; return the exit status (0; 2 for a store that is missing or not a run store)."""
-    try:
-        if not Path(args.store).is_file():
-            raise UsageError(f"--store {args.store}: no such file (a run store is made by catenary optimize)")
-        with RunStore(args.store, read_only=True) as store:
-            runs = store.run_progress()
-    except (UsageError, StoreError) as error:
-        if getattr(args, "debug", False):
-            raise
-        return print_error("runs", error)
+def run(args: argparse.Namespace) -> int:
+    """Execute ``runs``; return the exit status (0; a store that is missing or not a run store is refused)."""
+    if not Path(args.store).is_file():
+        raise UsageError(f"--store {args.store}: no such file (a run store is made by catenary optimize)")
+    with RunStore(args.store, read_only=True) as store:
+        runs = store.run_progress()
     print(json.dumps(runs) if args.json else _table(runs, args.store))
     return 0
 

@@ -1,0 +1,62 @@
+"""``catenary report``: every study's tables and figures in one Markdown file, re-made from its data."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+from pathlib import Path
+
+from ..common import DEFAULT_OUT
+from .experiment import STUDIES
+
+REPORT = "report.md"
+"""The report's file name in the studies' folder."""
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Add ``report`` to the sub-commands of ``catenary``."""
+    p = sub.add_parser(
+        "report",
+        help="write results/report.md: every study's tables and figures, re-made from its data alone",
+    )
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=DEFAULT_OUT,
+        metavar="FOLDER",
+        help=f"the studies' folder, with a folder per study (default: {DEFAULT_OUT})",
+    )
+
+
+def build_report(out: Path) -> Path | None:
+    """Write ``out/report.md``: every study's tables, re-made from its data without simulating, and its
+    figures; None when no study has data under ``out``."""
+    sections, missing = [], []
+    for name, study in STUDIES.items():
+        folder = Path(out) / name
+        if not (folder.is_dir() and any(folder.rglob("*.csv"))):
+            missing.append(name)
+            continue
+        module = importlib.import_module(f"experiments.{study.module}")
+        text = module.report(folder)
+        figures = [f"![{p.stem}]({p.relative_to(out).as_posix()})" for p in sorted(folder.rglob("*.png"))]
+        sections.append("\n\n".join([f"## {name}: {study.summary}", text, *figures]))
+    if not sections:
+        return None
+    if missing:
+        sections.append(
+            "Not run yet: " + ", ".join(f"`catenary experiment {name}`" for name in missing) + "."
+        )
+    path = Path(out) / REPORT
+    path.write_text("# catenary-env: study results\n\n" + "\n\n".join(sections) + "\n", encoding="utf-8")
+    return path
+
+
+def run(args: argparse.Namespace) -> int:
+    """Write the report; 0, or 1 when no study has data under ``--out``."""
+    path = build_report(args.out)
+    if path is None:
+        print(f"no study data under {args.out}: run 'catenary experiment NAME' first")
+        return 1
+    print(f"wrote {path}")
+    return 0

@@ -1,0 +1,188 @@
+"""``catenary propose POLICY --speed KMH``: the designs of a saved PPO design policy, and their σ.
+
+    catenary propose POLICY --speed KMH [KMH ...] [--no-evaluate] [--fidelity study|test] [--json]
+
+A policy file is a zip archive written by ``catenary optimize PROBLEM --optimizer ppo``: the
+stable-baselines3 model (``data``, ``policy.pth``, ...) and the project's record, ``catenary_env_policy.json``
+(docs/problems.md, 'Policy files'). Loading the model unpickles parts of it, as stable-baselines3 does: a
+policy file from someone else can run code on this machine. Load only policy files you made or trust. A file
+that is not a policy file (not a zip, no record, other members) is refused before stable-baselines3 reads it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any
+
+from catenary_env.cli.progress import ProgressDisplay
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add ``propose`` to the sub-commands of the ``catenary`` command."""
+    parser: argparse.ArgumentParser = subparsers.add_parser(
+        "propose",
+        help="the design a saved PPO policy proposes at a speed, and its sigma",
+        description="Load a PPO design policy saved by 'catenary optimize PROBLEM --optimizer ppo' and print "
+        "the design it proposes at each speed; unless --no-evaluate, simulate each design at its speed, "
+        "with the problem's reference design (the level contact wire) for comparison. Security: loading a "
+        "policy unpickles parts of it, as stable-baselines3 does, so a policy file from someone else can run "
+        "code on this machine; load only policy files you made or trust. A file that is not a policy file "
+        "(not a zip archive, no catenary_env_policy.json record, other members than a saved PPO model's) is "
+        "refused before stable-baselines3 reads it.",
+    )
+    parser.add_argument(
+        "policy",
+        metavar="POLICY",
+        help="the policy file: a zip saved by catenary optimize --optimizer ppo (only one you trust)",
+    )
+    parser.add_argument(
+        "--speed",
+        type=float,
+        nargs="+",
+        required=True,
+        metavar="KMH",
+        help="train speeds, km/h, one design each (within the policy's training speeds for a meaningful "
+        "design)",
+    )
+    parser.add_argument(
+        "--no-evaluate",
+        action="store_true",
+        help="print the designs only, without simulating them",
+    )
+    parser.add_argument(
+        "--fidelity",
+        choices=("study", "test"),
+        default=None,
+        help="the model the designs are simulated on (default: the one the policy was trained on)",
+    )
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        help="print one JSON object: the policy's record and, per speed, the design (m) and its sigma (N)",
+    )
+    return parser
+
+
+def run(args: argparse.Namespace) -> int:
+    """Execute ``propose``; return the exit status (0; a bad policy file or speed is refused)."""
+    report = _proposals(args)
+    print(json.dumps(report) if args.json else _proposal_table(report))
+    return 0
+
+
+def _proposals(args: argparse.Namespace) -> dict[str, Any]:
+    """The policy's record and its design at each speed (simulated unless --no-evaluate)."""
+    import dataclasses
+
+    from catenary_env.model.design import check_speed
+
+    from ..problem_registry import resolve_problem
+    from ..rl import design_for_speed, load_policy
+
+    policy, record = load_policy(args.policy)
+    problem = resolve_problem(record.problem)
+    _warn_if_stale(args.policy, record, problem)
+    catenary = _catenary_definition(record.problem)
+    for speed in args.speed:
+        if catenary is not None:
+            check_speed(catenary, speed / 3.6)
+        if not _trained_for(record, speed):
+            print(
+                f"catenary propose: warning: {speed:g} km/h is outside the policy's training speeds "
+                f"({record.speeds}): its design there is an extrapolation",
+                file=sys.stderr,
+            )
+    fidelity = args.fidelity or record.env_spec.fidelity
+    proposals = []
+    progress = ProgressDisplay("propose", len(args.speed), "speeds", quiet=args.json or args.no_evaluate)
+    for speed in args.speed:
+        x = design_for_speed(policy, problem, speed)
+        entry: dict[str, Any] = {
+            "speed_kmh": speed,
+            "design": dict(zip(problem.variable_names, x.tolist(), strict=True)),
+        }
+        if not args.no_evaluate:
+            outcome = problem.simulate(tuple(float(v) for v in x), float(speed), fidelity)
+            entry.update(feasible=outcome.feasible, sigma=outcome.sigma, reason=outcome.reason)
+            entry["reference_sigma"] = _reference_sigma(record.problem, speed, fidelity)
+        proposals.append(entry)
+        progress.update(len(proposals))
+    progress.finish()
+    policy_record = dataclasses.asdict(record)
+    return {
+        "policy": str(args.policy),
+        "record": policy_record,
+        "fidelity": None if args.no_evaluate else fidelity,
+        "proposals": proposals,
+        "units": {"speed_kmh": "km/h", "design": "m", "sigma, reference_sigma": "N"},
+    }
+
+
+def _catenary_definition(name: str) -> Any:
+    """The catenary of a catenary design problem (for its speed limit), or None for another problem."""
+    from catenary_env.problems import PROBLEMS
+
+    return PROBLEMS[name].catenary_definition if name in PROBLEMS else None
+
+
+def _reference_sigma(name: str, speed: float, fidelity: str) -> float | None:
+    """σ of a catenary problem's reference design at the speed, N (None for another problem)."""
+    from catenary_env.problems import PROBLEMS
+
+    if name not in PROBLEMS:
+        return None
+    statistics = PROBLEMS[name].reference_evaluation(speed, fidelity).statistics
+    return None if statistics is None else float(statistics.std)
+
+
+def _trained_for(record: Any, speed: float) -> bool:
+    spec = record.env_spec
+    if spec.speed_range is not None:
+        return spec.speed_range[0] <= speed <= spec.speed_range[1]
+    return spec.speed_kmh is None or abs(speed - spec.speed_kmh) < 1e-9
+
+
+def _warn_if_stale(path: str, record: Any, problem: Any) -> None:
+    now = str(getattr(problem, "model_fingerprint", ""))
+    if record.model_fingerprint and now and record.model_fingerprint != now:
+        print(
+            f"catenary propose: warning: {path} was trained on {record.problem} with model fingerprint "
+            f"{record.model_fingerprint}; the problem's model is now {now} (an edited preset or a new "
+            "simulator revision): its designs were learnt on the old model",
+            file=sys.stderr,
+        )
+
+
+def _proposal_table(report: dict[str, Any]) -> str:
+    record = report["record"]
+    spec = record["env_spec"]
+    trained = (
+        f"{spec['speed_range'][0]:g}-{spec['speed_range'][1]:g} km/h"
+        if spec["speed_range"] is not None
+        else f"{spec['speed_kmh']:g} km/h"
+    )
+    lines = [
+        f"{report['policy']}: ppo policy for {record['problem']}, trained on {trained} ({spec['fidelity']} "
+        f"fidelity, budget {record['budget']}, seed {record['seed']}, run {record['run_id']})"
+    ]
+    for entry in report["proposals"]:
+        lines.append(f"at {entry['speed_kmh']:g} km/h:")
+        lines.extend(f"  {name} = {value:.3f} m" for name, value in entry["design"].items())
+        if "feasible" in entry:
+            lines.append(_sigma_line(entry, report["fidelity"]))
+    return "\n".join(lines)
+
+
+def _sigma_line(entry: dict[str, Any], fidelity: str) -> str:
+    if not entry["feasible"]:
+        return f"  infeasible ({fidelity} fidelity): {entry['reason']}"
+    line = f"  sigma = {entry['sigma']:.3f} N ({fidelity} fidelity)"
+    reference = entry.get("reference_sigma")
+    if reference:
+        change = 100.0 * (entry["sigma"] - reference) / reference
+        line += f"; reference design (level contact wire): {reference:.3f} N, {change:+.1f} %"
+    return line
