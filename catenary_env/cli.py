@@ -363,7 +363,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     shape_time = time.perf_counter() - start
     calibration_time = 0.0
     if calibrate:
-        from .problems.calibration_cache import cached_uplift
+        from .calibration_cache import cached_uplift
 
         target = args.target_mean if args.target_mean is not None else en50367_mean_force(speed)
         start = time.perf_counter()

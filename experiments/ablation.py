@@ -32,6 +32,7 @@ from catenary_env.pipeline import FIDELITIES, Fidelity, calibrate_uplift, en5036
 from catenary_env.validation import validate
 
 from .common import DEFAULT_OUT, read_csv, run_cli, study_dir, worker_count, write_csv, write_json
+from .model_stamp import stamp_study
 
 NAME = "ablation"
 EN_SPEEDS = (250.0, 300.0)  # km/h
@@ -180,6 +181,7 @@ def main(config: Config) -> Path:
             "rows": rows,
         },
     )
+    stamp_study(folder, ("en50318-2002", "benchmark"))
     report(folder)
     return folder
 

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from .common import DEFAULT_OUT
+from .model_stamp import model_section
 
 REPORT = "report.md"
 """The report's file name in the studies' folder."""
@@ -65,8 +66,9 @@ def run_experiment(args: argparse.Namespace) -> int:
 
 
 def build_report(out: Path) -> Path | None:
-    """Write ``out/report.md``: every study's tables, re-made from its data without simulating, and its
-    figures; None when no study has data under ``out``."""
+    """Write ``out/report.md``: which model made each study's data (:mod:`experiments.model_stamp`), every
+    study's tables, re-made from its data without simulating, and its figures; None when no study has data
+    under ``out``."""
     sections, missing = [], []
     for name, study in STUDIES.items():
         folder = Path(out) / name
@@ -79,6 +81,7 @@ def build_report(out: Path) -> Path | None:
         sections.append("\n\n".join([f"## {name}: {study.summary}", text, *figures]))
     if not sections:
         return None
+    sections.insert(0, model_section({name: Path(out) / name for name in STUDIES if name not in missing}))
     if missing:
         sections.append(
             "Not run yet: " + ", ".join(f"`catenary experiment {name}`" for name in missing) + "."

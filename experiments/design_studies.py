@@ -44,6 +44,7 @@ from optimizers.ga import POPULATION_SIZES, GAOptions
 from optimizers.runner import optimize
 
 from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, run_cli, study_dir, worker_count, write_csv
+from .model_stamp import catenaries_of, stamp_study
 
 NAME = "design"
 PROBLEMS = ("B1", "B2", "B3", "SW1", "SW2", "SW3")
@@ -382,6 +383,7 @@ def main(config: Config) -> Path:
         get_problem(name)  # an unknown name fails here, before any simulation
     for name in config.problems:
         run_problem(name, config, folder, log)
+    stamp_study(folder, catenaries_of(config.problems))
     report(folder)
     return folder
 

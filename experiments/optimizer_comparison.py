@@ -59,6 +59,7 @@ from optimizers.store import RunStore
 from .common import DEFAULT_OUT, STORE, markdown_table, read_csv, run_cli, study_dir, worker_count, write_csv
 from .design_evaluations import evaluate_designs
 from .iohprofiler import runs_from_rows, write_algorithm
+from .model_stamp import catenaries_of, stamp_study
 from .rl_studies import policy_options, train_policy
 
 NAME = "optimizers"
@@ -152,6 +153,7 @@ def main(config: Config) -> Path:
     write_csv(folder / "evaluations.csv", evaluation_rows)
     write_csv(folder / "runs.csv", run_rows)
     write_csv(folder / "reference.csv", reference_rows)
+    stamp_study(folder, catenaries_of(config.problems))
     report(folder)
     return folder
 

@@ -21,6 +21,7 @@ import numpy as np
 from catenary_env.problems import evaluate_problem, get_problem
 
 from .common import DEFAULT_OUT, markdown_table, read_csv, run_cli, study_dir, worker_count, write_csv
+from .model_stamp import catenaries_of, stamp_study
 
 NAME = "presag"
 PROBLEMS = ("BPresag", "SWPresag")
@@ -75,6 +76,7 @@ def main(config: Config) -> Path:
         )
     folder = study_dir(config.out, NAME)
     write_csv(folder / "presag.csv", rows)
+    stamp_study(folder, catenaries_of(PROBLEMS))
     report(folder)
     return folder
 

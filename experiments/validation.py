@@ -15,6 +15,7 @@ from pathlib import Path
 from catenary_env.validation import validate
 
 from .common import DEFAULT_OUT, read_csv, run_cli, study_dir, write_csv
+from .model_stamp import stamp_study
 
 NAME = "validation"
 
@@ -41,6 +42,7 @@ def main(config: Config) -> Path:
     ]
     folder = study_dir(config.out, NAME)
     write_csv(folder / "en50318.csv", rows)
+    stamp_study(folder, ("en50318-2002",))
     report(folder)
     return folder
 

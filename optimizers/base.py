@@ -38,7 +38,7 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from catenary_env.problems.registry import Registry
+from catenary_env.registry import Registry
 
 from .problem import GridSpace
 

@@ -4,11 +4,13 @@ The modules are read with :mod:`ast`, not imported, so the test needs no optiona
 ``import`` counts, also those inside functions and under ``TYPE_CHECKING``: an import deferred to run
 time is still a dependency. The layers, lowest first::
 
-    model < fem < statics < dynamics < analysis < pipeline < problems < envs < catenary_env < cli
-          < optimizers < experiments
+    shared machinery < model < fem < statics < dynamics < analysis < pipeline < problems < envs
+          < catenary_env < cli < optimizers < experiments
 
 A module may import modules of its own layer or of a lower one; the package ``catenary_env`` itself
 (its ``__init__``, which re-exports the pipeline) sits above the environments and below the command line.
+The shared machinery (the registry class, the cache folder) imports nothing of the project, so that every
+layer may use it; the fingerprint and the uplift cache run the pipeline and serve every layer above it.
 """
 
 from __future__ import annotations
@@ -23,12 +25,18 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("catenary_env", "optimizers", "experiments")
 
 LAYERS = (
+    ("catenary_env.registry", "catenary_env.cache_folder"),
     ("catenary_env.model",),
     ("catenary_env.fem",),
     ("catenary_env.statics",),
     ("catenary_env.dynamics",),
     ("catenary_env.analysis",),
-    ("catenary_env.pipeline", "catenary_env.validation"),
+    (
+        "catenary_env.pipeline",
+        "catenary_env.validation",
+        "catenary_env.fingerprint",
+        "catenary_env.calibration_cache",
+    ),
     ("catenary_env.problems",),
     ("catenary_env.envs",),
     ("catenary_env",),  # the package's __init__: the re-exported API
