@@ -223,10 +223,15 @@ class DaskBackend(_Closing):
 
         # pure=False: never let Dask merge calls by their arguments; the run store is the cache.
         futures = [self._client.submit(simulate, *arguments, pure=False) for arguments in batch]
-        positions = {future.key: position for position, future in enumerate(futures)}
+        pending = {future.key: position for position, future in enumerate(futures)}
         try:
             for future in as_completed(futures):
-                yield positions[future.key], Outcome(*future.result())
+                outcome = Outcome(*future.result())
+                # The result is here: the cluster may forget it. A worker that dies later (its evaluations
+                # in flight run again on another) then leaves no finished evaluation to compute again.
+                futures.remove(future)
+                future.release()
+                yield pending.pop(future.key), outcome
         finally:
             self._client.cancel(futures)
 
