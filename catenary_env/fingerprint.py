@@ -203,7 +203,10 @@ def canary_values(canary: Canary) -> dict[str, list[int] | list[str]]:
 
 
 def _in_resolution(force: NDArray[np.float64]) -> list[int]:
-    return [int(v) for v in np.rint(np.asarray(force) / FORCE_RESOLUTION)]
+    """Forces as whole multiples of :data:`FORCE_RESOLUTION` (a non-finite force as an extreme one)."""
+    largest = 2.0**62
+    steps = np.nan_to_num(np.asarray(force) / FORCE_RESOLUTION, nan=-largest, posinf=largest, neginf=-largest)
+    return np.rint(np.clip(steps, -largest, largest)).astype(np.int64).tolist()
 
 
 def _significant(values: Sequence[float]) -> list[str]:
@@ -256,10 +259,16 @@ def _write_memo(path: Path | None, key: str, fingerprint: str) -> None:
     memo = {k: v for k, v in _read_memo(path).items() if k != key}
     memo[key] = fingerprint
     text = json.dumps(dict(list(memo.items())[-MEMO_ENTRIES:]), indent=1)
-    with contextlib.suppress(OSError):
+    temporary: str | None = None
+    try:
         path.parent.mkdir(parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile(
             "w", encoding="utf-8", dir=path.parent, prefix=".simulator-", suffix=".tmp", delete=False
         ) as handle:
+            temporary = handle.name
             handle.write(text)
-        os.replace(handle.name, path)
+        os.replace(temporary, path)
+    except OSError:
+        if temporary is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(temporary)

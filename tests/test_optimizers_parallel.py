@@ -144,7 +144,7 @@ def test_a_run_survives_a_dask_worker_killed_mid_run(tmp_path):
     distributed = pytest.importorskip("distributed")
     problem = dataclasses.replace(get_synthetic_problem("synthetic-quadratic-slow"), delay=0.05)
     budget, store = 60, tmp_path / "runs.sqlite"
-    undisturbed = optimize(problem, "ga", budget=budget, seed=3)
+    undisturbed = optimize(dataclasses.replace(problem, delay=0.0), "ga", budget=budget, seed=3)
     with distributed.LocalCluster(
         n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None
     ) as cluster:
