@@ -82,8 +82,12 @@ def model_section(folders: dict[str, Path]) -> str:
         if stamp is None:
             unknown.append(name)
         elif not stamp.is_current():
-            what = "simulator" if stamp.simulator != simulator_fingerprint() else "presets or fidelities"
-            other.append(f"{name} ({stamp.fingerprint}: another {what})")
+            what = (
+                "another simulator"
+                if stamp.simulator != simulator_fingerprint()
+                else "other presets or fidelities"
+            )
+            other.append(f"{name} ({stamp.fingerprint}: {what})")
     lines = [f"Model: simulator fingerprint {simulator_fingerprint()}."]
     if other:
         lines.append("Made with another model than the current one: " + ", ".join(other) + ".")
