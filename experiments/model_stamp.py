@@ -65,8 +65,15 @@ class ModelStamp:
 
 
 def stamp_study(folder: Path, catenaries: Sequence[str]) -> None:
-    """Record in ``folder`` that today's model made its data on ``catenaries`` (call it with the data)."""
-    ModelStamp.now(catenaries).write(folder)
+    """Record in ``folder`` that today's model made its data on ``catenaries`` (call it with the data).
+
+    Data of the synthetic problems only (no catenary) come from no catenary model: no stamp, and an older
+    one is removed.
+    """
+    if catenaries:
+        ModelStamp.now(catenaries).write(folder)
+    else:
+        (Path(folder) / STAMP).unlink(missing_ok=True)
 
 
 def catenaries_of(problems: Iterable[str]) -> tuple[str, ...]:

@@ -13,7 +13,7 @@ from catenary_env.cache_folder import CACHE_ENV
 from catenary_env.fingerprint import model_fingerprint
 from catenary_env.model.presets import load_catenary
 from catenary_env.problems import get_problem
-from experiments.model_stamp import STAMP, ModelStamp, model_section
+from experiments.model_stamp import STAMP, ModelStamp, model_section, stamp_study
 from optimizers import GridSpace, catenary_problem
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -116,3 +116,10 @@ def test_the_report_names_data_made_with_another_model(tmp_path):
     assert "unrecorded model (no model.json): unknown" in text
     assert "current (" not in text
     assert model_section({"current": tmp_path / "current"}).endswith("made with the current model.")
+
+
+def test_a_study_of_synthetic_problems_only_names_no_catenary_model(tmp_path):
+    stamp_study(tmp_path, ["benchmark"])
+    assert ModelStamp.read(tmp_path) == ModelStamp.now(["benchmark"])
+    stamp_study(tmp_path, [])  # the same folder rewritten by a study of the synthetic problems
+    assert ModelStamp.read(tmp_path) is None
