@@ -223,7 +223,7 @@ class DaskBackend(_Closing):
 
         # pure=False: never let Dask merge calls by their arguments; the run store is the cache.
         futures = [self._client.submit(simulate, *arguments, pure=False) for arguments in batch]
-        pending = {future.key: position for position, future in enumerate(futures)}
+        positions = {future.key: position for position, future in enumerate(futures)}
         try:
             for future in as_completed(futures):
                 outcome = Outcome(*future.result())
@@ -231,7 +231,7 @@ class DaskBackend(_Closing):
                 # in flight run again on another) then leaves no finished evaluation to compute again.
                 futures.remove(future)
                 future.release()
-                yield pending.pop(future.key), outcome
+                yield positions[future.key], outcome
         finally:
             self._client.cancel(futures)
 
