@@ -13,8 +13,9 @@ correlation of σ over each problem's random designs at least 0.99; and for the 
 mean 0.5 %, extremes 2 % of the mean, the largest support uplift 2 %.
 
 The reference results are data (``benchmarks/results/fidelity_reference.json``) with the model
-fingerprint they were computed under; they are recomputed only when it changes or with
-``--recompute``.
+fingerprint they were computed under (:func:`fingerprint`); they are recomputed only when it changes or
+with ``--recompute``. The contract's figures (``benchmarks/results/fidelity_contract.json``) carry the same
+fingerprint; a test fails when it is not the current one, naming :data:`REFRESH`.
 
     python benchmarks/fidelity_contract.py            # table; exit status 1 when the contract fails
     python benchmarks/fidelity_contract.py --json     # one JSON object with the figures and "passed"
@@ -37,12 +38,19 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy.stats import spearmanr  # noqa: E402
 
+from catenary_env.fingerprint import model_fingerprint  # noqa: E402
 from catenary_env.model.design import level_design  # noqa: E402
 from catenary_env.model.presets import load_catenary, load_pantograph  # noqa: E402
-from catenary_env.pipeline import FIDELITIES, Fidelity, evaluate, model_fingerprint, solve_static  # noqa: E402
+from catenary_env.pipeline import FIDELITIES, Fidelity, evaluate, solve_static  # noqa: E402
 from catenary_env.problems import PROBLEMS  # noqa: E402
 
 REFERENCE_FILE = Path(__file__).parent / "results" / "fidelity_reference.json"
+CONTRACT_FILE = Path(__file__).parent / "results" / "fidelity_contract.json"
+REFRESH = (
+    "python benchmarks/fidelity_contract.py --workers 2 --json > benchmarks/results/fidelity_contract.json"
+)
+"""The command that measures the contract again on the current model (the exact model's results too, when
+the model changed), and records it with its fingerprint."""
 SPEEDS_KMH = (250.0, 300.0, 350.0)
 RANDOM_PROBLEMS = ("B1", "B2", "B3", "SW1", "SW2", "SW3")
 RANDOM_DESIGNS = 20
@@ -150,7 +158,8 @@ def _exact_part(fidelity: Fidelity) -> dict:
 
 
 def fingerprint() -> str:
-    """The reference results' validity: the problems' models, the reference fidelity, the cases."""
+    """The reference results' validity: the problems' models (with the simulator's fingerprint,
+    :mod:`catenary_env.fingerprint`), the reference fidelity, the cases."""
     problems = [PROBLEMS[name].fingerprint() for name in PROBLEMS]
     en = (load_catenary("en50318-2002"), load_pantograph("en50318-2002"), _exact_part(_en_fidelity("exact")))
     reference = _exact_part(FIDELITIES["reference"])
@@ -273,7 +282,7 @@ def main(argv: list[str] | None = None) -> int:
     reduced = dict(
         zip((c.name for c in cases), _map(run_case, cases, "span-modes", args.workers), strict=True)
     )
-    report = evaluate_contract(cases, reference, reduced)
+    report = {"fingerprint": fingerprint(), **evaluate_contract(cases, reference, reduced)}
     if args.json:
         print(json.dumps(report, indent=1))
     else:

@@ -12,6 +12,9 @@ inside the contract on every case; they are constants of the model
 
     python benchmarks/fidelity_convergence.py          # runs it, writes results/fidelity_convergence.json
     python benchmarks/fidelity_convergence.py --table  # prints the table from that file
+
+The data file records the fingerprint of the model that made it
+(:func:`~catenary_env.fingerprint.presets_fingerprint` of :data:`CATENARIES`).
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ import math  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+from catenary_env.fingerprint import presets_fingerprint  # noqa: E402
 from catenary_env.model.design import level_design  # noqa: E402
 from catenary_env.model.presets import load_catenary, load_pantograph  # noqa: E402
 from catenary_env.pipeline import (  # noqa: E402
@@ -40,6 +44,8 @@ from catenary_env.pipeline import (  # noqa: E402
 from catenary_env.problems import PROBLEMS  # noqa: E402
 
 RESULTS = Path(__file__).parent / "results" / "fidelity_convergence.json"
+CATENARIES = ("benchmark", "en50318-2002", "stitched")
+"""The catenary presets of the cases."""
 NEAR = (200.0, 300.0, 400.0, 500.0, 600.0, 700.0, 800.0, 1000.0, 1500.0, 2000.0, math.inf)
 FAR = (20.0, 30.0, 50.0, 100.0, 200.0)
 SPANS = (1, 2, 3)
@@ -174,7 +180,8 @@ def main() -> None:
     args = parser.parse_args()
     if not args.table:
         RESULTS.parent.mkdir(parents=True, exist_ok=True)
-        RESULTS.write_text(json.dumps(run(), indent=1))
+        data = {"fingerprint": presets_fingerprint(CATENARIES), **run()}
+        RESULTS.write_text(json.dumps(data, indent=1))
     print(table(json.loads(RESULTS.read_text())))
 
 

@@ -33,42 +33,7 @@ from .dynamics.span_modes import reduce_system
 from .fem.layout import build_layout
 from .model.definition import CatenaryDefinition, PantographDefinition
 from .model.design import Design, DesignError, check_design, check_speed
-from .model.options import ModellingOptions
 from .statics.shape_finding import ShapeFindingError, StaticSolution, find_shape
-
-PHYSICS_REVISION = 3
-"""Raised whenever a change of the simulator changes its results, so that stored results of older
-revisions are not reused (it is part of :func:`model_fingerprint`). 2: the "study" fidelity runs the
-span-mode model (docs/performance.md, 'Model fidelities'). 3: the modelling choices' defaults follow the
-EN 50318:2002 reference model (docs/model.md, 'Modelling choices'): uplift force = static contact force,
-continuous messenger, messenger free along the track at the supports, transverse-only wires."""
-
-
-def model_fingerprint(*records: object) -> str:
-    """A short hash of definitions' data (provenance excluded) and :data:`PHYSICS_REVISION`.
-
-    Two evaluations may share a cached result only when their fingerprints agree: an edited copy of a
-    preset that keeps its name, or a new simulator revision, gets a new fingerprint. A catenary's modelling
-    choices count where they depart from the defaults, which are part of the revision.
-    """
-    import dataclasses
-    import hashlib
-    import json
-
-    default_modelling = dataclasses.asdict(ModellingOptions())
-
-    def plain(record: object) -> object:
-        if dataclasses.is_dataclass(record) and not isinstance(record, type):
-            data = dataclasses.asdict(record)
-            data.pop("provenance", None)
-            if data.get("modelling") == default_modelling:
-                data.pop("modelling")
-            return data
-        return record
-
-    text = json.dumps([PHYSICS_REVISION, *map(plain, records)], sort_keys=True, default=repr)
-    return hashlib.sha256(text.encode()).hexdigest()[:12]
-
 
 NEAR_CUTOFF = math.inf
 """Hz: modes kept near the pantograph: every one (the convergence study, docs/performance.md: a dropper

@@ -44,6 +44,7 @@ from .common import (
     write_csv,
     write_json,
 )
+from .model_stamp import stamp_study
 
 NAME = "ablation"
 EN_SPEEDS = (250.0, 300.0)  # km/h
@@ -192,6 +193,7 @@ def main(config: Config) -> Path:
             "rows": rows,
         },
     )
+    stamp_study(folder, ("en50318-2002", "benchmark"))
     report(folder)
     return folder
 

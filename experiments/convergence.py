@@ -29,6 +29,7 @@ from .common import (
     study_dir,
     write_csv,
 )
+from .model_stamp import stamp_study
 
 NAME = "convergence"
 SETTINGS = ((1.0, 2e-3), (1.0, 1e-3), (0.5, 1e-3), (0.25, 1e-3), (0.5, 5e-4), (0.25, 5e-4))
@@ -86,6 +87,7 @@ def main(config: Config) -> Path:
         row["change_vs_finest_percent"] = 100.0 * (row["sigma_N"] - finest) / finest
     folder = study_dir(config.out, NAME)
     write_csv(folder / "convergence.csv", rows)
+    stamp_study(folder, ("benchmark",))
     report(folder)
     return folder
 

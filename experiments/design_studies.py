@@ -57,6 +57,7 @@ from .common import (
     study_dir,
     write_csv,
 )
+from .model_stamp import catenaries_of, stamp_study
 
 NAME = "design"
 PROBLEMS = ("B1", "B2", "B3", "SW1", "SW2", "SW3")
@@ -395,6 +396,7 @@ def main(config: Config) -> Path:
         get_problem(name)  # an unknown name fails here, before any simulation
     for name in config.problems:
         run_problem(name, config, folder, log)
+    stamp_study(folder, catenaries_of(config.problems))
     report(folder)
     return folder
 

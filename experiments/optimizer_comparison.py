@@ -72,6 +72,7 @@ from .common import (
 )
 from .design_evaluations import evaluate_designs, study_problem
 from .iohprofiler import runs_from_rows, write_algorithm
+from .model_stamp import catenaries_of, stamp_study
 from .rl_studies import policy_options, train_policy
 
 NAME = "optimizers"
@@ -166,6 +167,7 @@ def main(config: Config) -> Path:
     write_csv(folder / "evaluations.csv", evaluation_rows)
     write_csv(folder / "runs.csv", run_rows)
     write_csv(folder / "reference.csv", reference_rows)
+    stamp_study(folder, catenaries_of(config.problems))
     report(folder)
     return folder
 

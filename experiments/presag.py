@@ -33,6 +33,7 @@ from .common import (
     study_dir,
     write_csv,
 )
+from .model_stamp import catenaries_of, stamp_study
 
 NAME = "presag"
 PROBLEMS = ("BPresag", "SWPresag")
@@ -87,6 +88,7 @@ def main(config: Config) -> Path:
         )
     folder = study_dir(config.out, NAME)
     write_csv(folder / "presag.csv", rows)
+    stamp_study(folder, catenaries_of(PROBLEMS))
     report(folder)
     return folder
 

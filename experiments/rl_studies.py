@@ -75,6 +75,7 @@ from .common import (
     write_csv,
 )
 from .design_evaluations import evaluate_designs, mean_sigma_problem
+from .model_stamp import catenaries_of, stamp_study
 
 NAME = "rl"
 SPEED_KMH = 300.0
@@ -220,6 +221,7 @@ def main(config: Config) -> Path:
     write_csv(folder / "speed_policy.csv", tables["speed"])
     write_csv(folder / "robust.csv", tables["robust"])
     write_csv(folder / "reference.csv", tables["reference"])
+    stamp_study(folder, catenaries_of(config.problems))
     report(folder)
     return folder
 

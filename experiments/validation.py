@@ -25,6 +25,7 @@ from .common import (
     study_dir,
     write_csv,
 )
+from .model_stamp import stamp_study
 
 NAME = "validation"
 
@@ -40,6 +41,7 @@ def main(config: Config) -> Path:
     rows = [{**r.as_dict(), "passed": int(r.passed)} for r in result.rows]
     folder = study_dir(config.out, NAME)
     write_csv(folder / "en50318.csv", rows)
+    stamp_study(folder, ("en50318-2002",))
     report(folder)
     return folder
 

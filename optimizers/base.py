@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from catenary_env.errors import UnknownNameError, UsageError
-from catenary_env.problems.registry import Registry
+from catenary_env.registry import Registry
 
 from .problem import GridSpace
 

@@ -242,7 +242,12 @@ class DaskBackend(_Closing):
         positions = {future.key: position for position, future in enumerate(futures)}
         try:
             for future in as_completed(futures):
-                yield positions[future.key], Outcome(*future.result())
+                outcome = Outcome(*future.result())
+                # The result is here: the cluster may forget it. A worker that dies later (its evaluations
+                # in flight run again on another) then leaves no finished evaluation to compute again.
+                futures.remove(future)
+                future.release()
+                yield positions[future.key], outcome
         finally:
             self._client.cancel(futures)
 

@@ -133,7 +133,8 @@ class GridSpace(DesignGrid):
     @property
     def store_key(self) -> str:
         """The problem's name in the run store: with the model's fingerprint where the problem has one, so
-        that results of another model (an edited preset, another simulator revision) are never reused."""
+        that results of another model (an edited preset, a simulator that computes other numbers,
+        :mod:`catenary_env.fingerprint`) are never reused."""
         return f"{self.name}@{self.model}" if self.model else self.name
 
     def to_design(self, k: ArrayLike) -> NDArray[np.float64]:

@@ -15,9 +15,11 @@ The file carries a marker: SQLite's ``application_id`` header field is :data:`AP
 ``user_version`` is :data:`SCHEMA_VERSION`. A file that is not SQLite, or an SQLite database without
 the marker (someone else's), or one of another schema version, is refused with :class:`StoreError`.
 
-The cache key does not include the simulator's version: a store holds the results of one version of the
-physics. The run table records the package version, and resuming a run made by another version is
-refused; for new runs after a change to the physics, start a new store.
+A catenary problem's name in the store carries the fingerprint of its model
+(:attr:`~optimizers.problem.GridSpace.store_key`, ``B1@<fingerprint>``: the definitions, the named fidelities'
+settings and what the simulator computes, :mod:`catenary_env.fingerprint`), so a store never serves σ of
+another model: after a change of the physics the same file holds the new results beside the old ones. The
+run table also records the package version, and resuming a run made by another version is refused.
 
 Examples
 --------

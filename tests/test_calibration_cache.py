@@ -16,18 +16,12 @@ from pathlib import Path
 
 import pytest
 
-from catenary_env import pipeline
+from catenary_env import fingerprint, pipeline
+from catenary_env.calibration_cache import CACHE_ENV, CacheWarning, cache_file, cached_uplift
 from catenary_env.cli import main
 from catenary_env.model.design import level_design
 from catenary_env.model.presets import load_catenary, load_pantograph
 from catenary_env.problems import PROBLEMS, clear_caches
-from catenary_env.problems.calibration_cache import (
-    CACHE_ENV,
-    CacheWarning,
-    cache_file,
-    cached_uplift,
-    simulator_digest,
-)
 
 ROOT = Path(__file__).resolve().parents[1]
 FAKE_FORCE = 123.456
@@ -50,7 +44,6 @@ def calls(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Iterator[list[tupl
 
 
 def test_a_second_process_reads_the_calibration_instead_of_computing_it(calls, capsys):
-    simulator_digest.cache_clear()  # this process's digest of the source as it is now, like the other's
     assert PROBLEMS["B1"].uplift_force(300.0, "test") == FAKE_FORCE
     assert calls == [("benchmark", 300.0)]
     err = capsys.readouterr().err
@@ -92,11 +85,23 @@ def test_the_key_includes_the_models_fingerprint(calls):
     entries = json.loads(cache_file().read_text())["entries"].values()
     fingerprints = {entry["model_fingerprint"] for entry in entries}
     assert fingerprints == {
-        pipeline.model_fingerprint(catenary, pantograph),
-        pipeline.model_fingerprint(catenary, heavier),
+        fingerprint.model_fingerprint(catenary, pantograph),
+        fingerprint.model_fingerprint(catenary, heavier),
     }
     cached_uplift(catenary, pantograph, design, 300.0, fidelity, 160.0)  # another target mean force
     assert len(calls) == 3
+
+
+def test_a_simulator_that_computes_other_numbers_calibrates_anew(calls, monkeypatch):
+    """The one invalidation rule: the simulator's fingerprint (its canaries' forces) is part of the key."""
+    catenary, pantograph = load_catenary("benchmark"), load_pantograph("benchmark")
+    arguments = (catenary, pantograph, level_design(catenary), 300.0, pipeline.FIDELITIES["test"], 157.3)
+    cached_uplift(*arguments)
+    cached_uplift(*arguments)
+    assert len(calls) == 1
+    monkeypatch.setattr(fingerprint, "simulator_fingerprint", lambda: "other-forces")
+    cached_uplift(*arguments)
+    assert len(calls) == 2
 
 
 @pytest.mark.parametrize(

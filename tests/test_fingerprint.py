@@ -1,14 +1,22 @@
-"""Stored results are reused only for the same model: the fingerprint follows the data, not the names."""
+"""Stored results are reused only for the same model: the fingerprint follows the data and the numbers the
+simulator computes, not the names or the source (docs/model.md, 'Results and the model that made them')."""
 
 from __future__ import annotations
 
 import dataclasses
+import importlib
+import json
+from pathlib import Path
 
-from catenary_env import pipeline
+from catenary_env import fingerprint, pipeline
+from catenary_env.cache_folder import CACHE_ENV
+from catenary_env.fingerprint import model_fingerprint
 from catenary_env.model.presets import load_catenary
-from catenary_env.pipeline import model_fingerprint
 from catenary_env.problems import get_problem
+from experiments.model_stamp import STAMP, ModelStamp, model_section, stamp_study
 from optimizers import GridSpace, catenary_problem
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_fingerprint_is_stable_and_follows_the_data():
@@ -35,3 +43,83 @@ def test_run_store_key_follows_the_fidelities(monkeypatch):
     monkeypatch.setitem(pipeline.FIDELITIES, "study", dataclasses.replace(study, near_cutoff=600.0))
     assert get_problem("B1").store_fingerprint() != before
     assert get_problem("B1").fingerprint() == model  # the model's data are the same
+
+
+def test_a_simulator_that_computes_other_numbers_is_another_store_key(monkeypatch):
+    """The one invalidation rule: the run store's key carries the simulator's fingerprint, not a revision."""
+    before = catenary_problem("B1").model_fingerprint
+    monkeypatch.setattr(fingerprint, "simulator_fingerprint", lambda: "other-forces")
+    assert catenary_problem("B1").model_fingerprint != before
+
+
+def test_rounding_noise_keeps_the_canary_and_a_change_of_the_numbers_changes_it(monkeypatch):
+    """A pure refactoring moves the forces by rounding noise (the compiled and numpy loops: 1e-9 N); a
+    change of the physics by more than the resolution. The uplift force stands in for both."""
+    canary = fingerprint.CANARIES[1]  # the span-mode model: the quickest
+    values = fingerprint.canary_values(canary)
+    assert len(values["contact_force"]) > 100 and max(values["contact_force"]) > 0
+    monkeypatch.setattr(fingerprint, "CANARY_UPLIFT", fingerprint.CANARY_UPLIFT * (1.0 + 1e-12))
+    assert fingerprint.canary_values(canary) == values
+    monkeypatch.setattr(fingerprint, "CANARY_UPLIFT", fingerprint.CANARY_UPLIFT * (1.0 + 1e-5))
+    changed = fingerprint.canary_values(canary)
+    assert changed["contact_force"] != values["contact_force"]
+    assert changed["statistics"] != values["statistics"]
+
+
+def test_the_memo_finds_the_canaries_result_by_the_source(monkeypatch, tmp_path):
+    runs = []
+
+    def canary_values(canary):  # type: ignore[no-untyped-def]
+        runs.append(canary.name)
+        return {"contact_force": [len(runs)]}
+
+    monkeypatch.setenv(CACHE_ENV, str(tmp_path))
+    monkeypatch.setattr(fingerprint, "canary_values", canary_values)
+    compute = fingerprint.simulator_fingerprint.__wrapped__  # without this process's memory
+    first = compute()
+    assert len(runs) == len(fingerprint.CANARIES)
+    assert compute() == first and len(runs) == len(fingerprint.CANARIES)  # read from the memo
+    monkeypatch.setattr(fingerprint, "source_digest", lambda: "edited-source")
+    assert compute() != first  # another source: the canaries ran again, and gave other numbers
+    assert len(runs) == 2 * len(fingerprint.CANARIES)
+
+
+def test_the_fidelity_contract_was_measured_on_the_current_model(monkeypatch):
+    monkeypatch.syspath_prepend(str(ROOT / "benchmarks"))
+    contract = importlib.import_module("fidelity_contract")
+    now = contract.fingerprint()
+    for path in (contract.REFERENCE_FILE, contract.CONTRACT_FILE):
+        recorded = json.loads(path.read_text(encoding="utf-8")).get("fingerprint")
+        assert recorded == now, (
+            f"{path.relative_to(ROOT)} was made with model {recorded}, the current one is {now}: measure the "
+            f"contract again with: {contract.REFRESH}"
+        )
+
+
+def test_every_committed_study_names_the_model_that_made_it():
+    studies = [folder for folder in sorted((ROOT / "results").iterdir()) if folder.is_dir()]
+    assert studies
+    for folder in studies:
+        stamp = ModelStamp.read(folder)
+        assert stamp is not None, f"{folder.relative_to(ROOT)} has no {STAMP}"
+        assert stamp.catenaries and set(stamp.catenaries) <= {"benchmark", "stitched", "en50318-2002"}
+
+
+def test_the_report_names_data_made_with_another_model(tmp_path):
+    for name in ("current", "old", "unknown"):
+        (tmp_path / name).mkdir()
+    current = ModelStamp.now(["benchmark"])
+    current.write(tmp_path / "current")
+    dataclasses.replace(current, fingerprint="0ld0ld0ld0ld", simulator="0ld0ld0ld0ld").write(tmp_path / "old")
+    text = model_section({name: tmp_path / name for name in ("current", "old", "unknown")})
+    assert "another model than the current one: old (0ld0ld0ld0ld: another simulator)" in text
+    assert "unrecorded model (no model.json): unknown" in text
+    assert "current (" not in text
+    assert model_section({"current": tmp_path / "current"}).endswith("made with the current model.")
+
+
+def test_a_study_of_synthetic_problems_only_names_no_catenary_model(tmp_path):
+    stamp_study(tmp_path, ["benchmark"])
+    assert ModelStamp.read(tmp_path) == ModelStamp.now(["benchmark"])
+    stamp_study(tmp_path, [])  # the same folder rewritten by a study of the synthetic problems
+    assert ModelStamp.read(tmp_path) is None

@@ -4,11 +4,13 @@ The modules are read with :mod:`ast`, not imported, so the test needs no optiona
 ``import`` counts, also those inside functions and under ``TYPE_CHECKING``: an import deferred to run
 time is still a dependency. The layers, lowest first::
 
-    model (and errors) < fem < statics < dynamics < analysis < pipeline < problems < envs < catenary_env
-          < cli < optimizers < experiments
+    shared machinery < model (and errors) < fem < statics < dynamics < analysis < pipeline < problems < envs
+          < catenary_env < cli < optimizers < experiments
 
 A module may import modules of its own layer or of a lower one; the package ``catenary_env`` itself
 (its ``__init__``, which re-exports the pipeline) sits above the environments and below the command line.
+The shared machinery (the registry class, the cache folder) imports nothing of the project, so that every
+layer may use it; the fingerprint and the uplift cache run the pipeline and serve every layer above it.
 The project's errors (``catenary_env.errors``) sit at the bottom, with the model, so that every layer raises
 them. The command line (``catenary_env.cli``) is the simulator's edge: nothing in the simulator imports it,
 and it imports neither the optimisers nor the studies (their commands plug in through entry points).
@@ -26,12 +28,19 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("catenary_env", "optimizers", "experiments")
 
 LAYERS = (
+    ("catenary_env.registry", "catenary_env.cache_folder"),
     ("catenary_env.model", "catenary_env.errors"),
     ("catenary_env.fem",),
     ("catenary_env.statics",),
     ("catenary_env.dynamics",),
     ("catenary_env.analysis",),
-    ("catenary_env.pipeline", "catenary_env.validation", "catenary_env.blas_threads"),
+    (
+        "catenary_env.pipeline",
+        "catenary_env.validation",
+        "catenary_env.blas_threads",
+        "catenary_env.fingerprint",
+        "catenary_env.calibration_cache",
+    ),
     ("catenary_env.problems",),
     ("catenary_env.envs",),
     ("catenary_env",),  # the package's __init__: the re-exported API

@@ -16,11 +16,12 @@ from catenary_env.dynamics.linear_system import LinearSystem, linearise
 from catenary_env.dynamics.oracle import simulate_passage_reference
 from catenary_env.dynamics.pantograph import STATIC_POINTS, frame_force, pantograph_matrices
 from catenary_env.fem.layout import CONTACT, build_layout
+from catenary_env.fingerprint import model_fingerprint
 from catenary_env.model.definition import DefinitionError
 from catenary_env.model.design import DesignError, level_design
 from catenary_env.model.options import CHOICES, ModellingOptions
 from catenary_env.model.presets import load_catenary, load_pantograph, preset_path
-from catenary_env.pipeline import FIDELITIES, model_fingerprint, simulate
+from catenary_env.pipeline import FIDELITIES, simulate
 from catenary_env.statics.shape_finding import find_shape
 from catenary_env.validation import QUANTITIES, load_ranges
 
@@ -71,7 +72,7 @@ def test_the_modelling_table_of_a_preset_is_read_and_checked(tmp_path):
         load_catenary(path)
 
 
-def test_the_defaults_are_part_of_the_revision_and_a_departure_changes_the_fingerprint():
+def test_the_defaults_are_the_canaries_and_a_departure_changes_the_fingerprint():
     assert model_fingerprint(_catenary()) == model_fingerprint(EN)
     changed = {model_fingerprint(_catenary(**{k: v[1]})) for k, v in CHOICES.items()}
     assert len(changed) == len(CHOICES) and model_fingerprint(EN) not in changed

@@ -1,11 +1,15 @@
-"""Parallel evaluation: local processes and a Dask LocalCluster give the results of in-process evaluation."""
+"""Parallel evaluation: local processes and a Dask LocalCluster give the results of in-process evaluation,
+also when a Dask worker dies in the middle of a run."""
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -14,6 +18,7 @@ from conftest import requires
 
 from optimizers import optimize
 from optimizers.evaluation import DaskBackend, InProcessBackend, ProcessPoolBackend
+from optimizers.store import RunStore
 from optimizers.synthetic import get_synthetic_problem
 
 PROBLEM = get_synthetic_problem("synthetic-quadratic")
@@ -108,3 +113,63 @@ def test_a_killed_run_leaves_no_worker_alive(tmp_path, kill):
         assert process.returncode == 128 + signal.SIGTERM
         assert "terminated (SIGTERM)" in stderr and "--resume" in stderr
         assert "Traceback" not in stderr
+
+
+def _kill_a_busy_worker(scheduler: str, store: Path, after: int, killed: list[tuple[int, int]]) -> None:
+    """Once ``after`` evaluations are in the store, SIGKILL a Dask worker process that is simulating;
+    record (its pid, the evaluations stored by then) in ``killed``."""
+    import sqlite3
+
+    from distributed import Client
+
+    with Client(scheduler, timeout=30) as client:
+        pids = client.run(os.getpid)
+        for _ in range(6000):  # up to a minute
+            time.sleep(0.01)
+            try:
+                with contextlib.closing(sqlite3.connect(store, timeout=1.0)) as connection:
+                    done = connection.execute("SELECT count(*) FROM evaluations").fetchone()[0]
+            except sqlite3.Error:  # the run has not made its tables yet
+                continue
+            busy = [address for address, tasks in client.processing().items() if tasks]
+            if done >= after and busy:
+                os.kill(pids[busy[0]], signal.SIGKILL)
+                killed.append((pids[busy[0]], done))
+                return
+
+
+def test_a_run_survives_a_dask_worker_killed_mid_run(tmp_path):
+    """A worker killed while it simulates: its lost evaluations run again elsewhere, the run finishes,
+    nothing is lost or charged twice, and the history is the undisturbed run's."""
+    distributed = pytest.importorskip("distributed")
+    problem = dataclasses.replace(get_synthetic_problem("synthetic-quadratic-slow"), delay=0.05)
+    budget, store = 60, tmp_path / "runs.sqlite"
+    undisturbed = optimize(dataclasses.replace(problem, delay=0.0), "ga", budget=budget, seed=3)
+    with distributed.LocalCluster(
+        n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None
+    ) as cluster:
+        killed: list[tuple[int, int]] = []
+        killer = threading.Thread(
+            target=_kill_a_busy_worker, args=(cluster.scheduler_address, store, budget // 3, killed)
+        )
+        killer.start()
+        try:
+            result = optimize(
+                problem, "ga", budget=budget, seed=3, scheduler=cluster.scheduler_address, store=store
+            )
+        finally:
+            killer.join()
+        computed = [
+            entry.key
+            for entry in cluster.scheduler.transition_log
+            if str(entry.key).startswith("simulate_quadratic") and entry.finish == "memory"
+        ]
+    assert killed and killed[0][1] < budget, "no worker was killed while the run was simulating"
+    # Only the evaluation the killed worker was simulating ran twice: the results already received are not
+    # computed again (the cluster had forgotten them).
+    assert budget <= len(computed) <= budget + 1
+    assert _comparable(result.history) == _comparable(undisturbed.history)
+    assert result.n_simulations == budget
+    with RunStore(store) as run_store:
+        (run,) = run_store.run_progress()
+        assert run["evaluations"] == len(undisturbed.history) and run["simulations"] == budget

@@ -14,8 +14,8 @@ import pytest
 gymnasium = pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
+from catenary_env.calibration_cache import CACHE_ENV  # noqa: E402
 from catenary_env.cli import main  # noqa: E402
-from catenary_env.problems.calibration_cache import CACHE_ENV  # noqa: E402
 from optimizers.catenary_adapter import catenary_problem  # noqa: E402
 from optimizers.rl import (  # noqa: E402
     POLICY_MEMBER,

@@ -105,9 +105,9 @@ def _calibrated_uplift(
     fidelity: Fidelity,
 ) -> float:
     """The uplift force that gives the level design the target mean contact force at the speed, N."""
+    from ..calibration_cache import cached_uplift
     from ..model.design import level_design
     from ..pipeline import en50367_mean_force
-    from ..problems.calibration_cache import cached_uplift
 
     target = args.target_mean if args.target_mean is not None else en50367_mean_force(args.speed / 3.6)
     with options.static_shape_of(None):

@@ -35,7 +35,7 @@ FORMER_DEFAULTS = {
     "axial_restraint": "every-support",
     "linearisation": "extensible",
 }
-"""The choices whose default changed with physics revision 3 (catenary_env.pipeline.PHYSICS_REVISION), and
+"""The choices whose default changed with physics revision 3 (docs/model.md, 'Model revisions'), and
 their former default: ``ModellingOptions(**FORMER_DEFAULTS)`` is the model of revision 2."""
 
 

@@ -2,14 +2,14 @@
 
 ``grid`` owns the variables' grid (bounds, steps, snapping, actions, cache keys); ``design_problem`` maps
 variables to a design and evaluates it; ``reference`` calibrates the pantograph on the reference
-design once per process; ``catalogue`` holds the eight problems; ``registry`` the registry class.
+design once per process; ``catalogue`` holds the eight problems and their registry (a
+:class:`~catenary_env.registry.Registry`).
 """
 
 from .catalogue import PROBLEMS, ProblemRegistry, evaluate_problem, get_problem, register_problem
 from .design_problem import DesignProblem, resolve_fidelity
 from .grid import HEIGHT_STEP, POSITION_STEP, DesignGrid
 from .reference import clear_caches
-from .registry import Registry
 
 __all__ = [
     "HEIGHT_STEP",
@@ -18,7 +18,6 @@ __all__ = [
     "DesignGrid",
     "DesignProblem",
     "ProblemRegistry",
-    "Registry",
     "clear_caches",
     "evaluate_problem",
     "get_problem",

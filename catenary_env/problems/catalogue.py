@@ -16,9 +16,9 @@ import numpy as np
 
 from ..errors import UnknownNameError
 from ..pipeline import Evaluation, Fidelity
+from ..registry import Registry
 from .design_problem import DesignProblem
 from .grid import HEIGHT_STEP, POSITION_STEP
-from .registry import Registry
 
 __all__ = ["PROBLEMS", "ProblemRegistry", "evaluate_problem", "get_problem", "register_problem"]
 

@@ -12,7 +12,7 @@ Heights live on a 1 mm grid, positions on a 1 cm grid (docs/problems.md, 'Design
 Every design of a problem is simulated with the same pantograph uplift force: the one for which the problem's
 reference design (the level wire on the preset's droppers) has the EN 50367 mean contact force at the speed
 (docs/problems.md, 'Reference design and uplift'). It is calibrated once per model, speed and fidelity and
-kept on disk for later processes and commands (:mod:`~catenary_env.problems.calibration_cache`).
+kept on disk for later processes and commands (:mod:`~catenary_env.calibration_cache`).
 
 Examples
 --------
@@ -35,9 +35,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import pipeline
+from ..fingerprint import model_fingerprint
 from ..model.definition import CatenaryDefinition, PantographDefinition
 from ..model.design import Design, DesignError, check_design, check_speed, presag_design, symmetric_design
-from ..pipeline import FIDELITIES, Evaluation, Fidelity, check_fidelity, check_uplift, model_fingerprint
+from ..pipeline import FIDELITIES, Evaluation, Fidelity, check_fidelity, check_uplift
 from .grid import DesignGrid
 from .reference import calibrated_uplift, preset_catenary, preset_pantograph, reference_evaluation
 
@@ -236,7 +237,7 @@ class DesignProblem:
         Calibrated so that the reference design's mean contact force equals the EN 50367 target at
         ``speed_kmh`` (a few passages: some 15 s at the study fidelity, announced on stderr); kept per
         model fingerprint (catenary and pantograph data), speed and fidelity in this process and on disk
-        (:mod:`~catenary_env.problems.calibration_cache`), so later processes and commands reuse it.
+        (:mod:`~catenary_env.calibration_cache`), so later processes and commands reuse it.
         """
         return calibrated_uplift(
             self.catenary, self.reference_design(), float(speed_kmh), resolve_fidelity(fidelity)

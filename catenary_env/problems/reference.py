@@ -4,7 +4,7 @@ Every design of a problem is simulated with the same pantograph uplift force: th
 reference design (the level contact wire on the preset's droppers) has the EN 50367 mean contact force at the
 speed (docs/problems.md, 'Reference design and uplift'). It is calibrated once per model (catenary and
 pantograph data), speed and fidelity and kept on disk for every later process and command
-(:mod:`~catenary_env.problems.calibration_cache`), and in this process's memory, as are the presets.
+(:mod:`~catenary_env.calibration_cache`), and in this process's memory, as are the presets.
 """
 
 from __future__ import annotations
@@ -12,11 +12,11 @@ from __future__ import annotations
 import functools
 
 from .. import pipeline
+from ..calibration_cache import cached_uplift
 from ..model.definition import CatenaryDefinition, PantographDefinition
 from ..model.design import Design, check_speed
 from ..model.presets import load_catenary, load_pantograph
 from ..pipeline import Evaluation, Fidelity
-from .calibration_cache import cached_uplift
 
 __all__ = [
     "calibrated_uplift",

@@ -7,6 +7,7 @@ import importlib
 from pathlib import Path
 
 from ..common import DEFAULT_OUT
+from ..model_stamp import model_section
 from .experiment import STUDIES
 
 REPORT = "report.md"
@@ -29,8 +30,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def build_report(out: Path) -> Path | None:
-    """Write ``out/report.md``: every study's tables, re-made from its data without simulating, and its
-    figures; None when no study has data under ``out``."""
+    """Write ``out/report.md``: which model made each study's data (:mod:`experiments.model_stamp`), every
+    study's tables, re-made from its data without simulating, and its figures; None when no study has data
+    under ``out``."""
     sections, missing = [], []
     for name, study in STUDIES.items():
         folder = Path(out) / name
@@ -43,6 +45,7 @@ def build_report(out: Path) -> Path | None:
         sections.append("\n\n".join([f"## {name}: {study.summary}", text, *figures]))
     if not sections:
         return None
+    sections.insert(0, model_section({name: Path(out) / name for name in STUDIES if name not in missing}))
     if missing:
         sections.append(
             "Not run yet: " + ", ".join(f"`catenary experiment {name}`" for name in missing) + "."

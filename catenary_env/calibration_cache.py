@@ -5,20 +5,18 @@ reference design, some 15 s at the study fidelity: every ``catenary evaluate``, 
 worker would pay it again. :func:`cached_uplift` keeps each result in one small JSON file,
 ``uplift.json`` in the cache folder (:func:`cache_folder`), keyed by
 
-- the model: the catenary's and pantograph's data (:func:`~catenary_env.pipeline.model_fingerprint`, so
-  an edited copy of a preset that keeps its name is a new key), the design calibrated on and the
-  fidelity;
-- the speed (km/h) and the target mean contact force (N);
-- the simulator: :data:`~catenary_env.pipeline.PHYSICS_REVISION` and a digest of the simulator's source
-  (a code change recalibrates, rather than reuse a force computed by other physics).
+- the model: the catenary's and pantograph's data, the design calibrated on and the fidelity, with the
+  simulator's fingerprint (:func:`~catenary_env.fingerprint.model_fingerprint`: an edited copy of a preset
+  that keeps its name, or a simulator that computes other numbers, is a new key);
+- the speed (km/h) and the target mean contact force (N).
 
 The file is replaced atomically (written beside it, then renamed), so a reader never sees half of it; a
 calibration in progress holds the cache's lock, so that parallel workers wait for the first one's result
 instead of repeating it. A file that cannot be read is ignored with a :class:`CacheWarning` and rewritten;
 a folder that cannot be written leaves the result in this process only. Neither is ever fatal.
 
-``CATENARY_ENV_CACHE`` sets the folder; ``CATENARY_ENV_CACHE=off`` keeps nothing on disk (the tests run
-so). Default: ``$XDG_CACHE_HOME/catenary-env``, else ``~/.cache/catenary-env``.
+``CATENARY_ENV_CACHE`` sets the folder (:mod:`~catenary_env.cache_folder`); ``CATENARY_ENV_CACHE=off`` keeps
+nothing on disk (the tests run so).
 """
 
 from __future__ import annotations
@@ -26,8 +24,6 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import dataclasses
-import functools
-import hashlib
 import json
 import math
 import os
@@ -39,21 +35,17 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from .. import pipeline
-from ..model.definition import CatenaryDefinition, PantographDefinition
-from ..model.design import Design
+from . import pipeline
+from .cache_folder import CACHE_ENV, cache_folder
+from .fingerprint import model_fingerprint
+from .model.definition import CatenaryDefinition, PantographDefinition
+from .model.design import Design
 
 __all__ = ["CACHE_ENV", "CacheWarning", "cache_file", "cache_folder", "cached_uplift", "quiet_calibrations"]
-
-CACHE_ENV = "CATENARY_ENV_CACHE"
-"""Environment variable: the cache folder, or ``off`` to keep no cache on disk."""
 
 FILE_NAME = "uplift.json"
 FORMAT = 1
 """Version of the file's layout; a file of another version is ignored (and rewritten)."""
-
-SIMULATOR_PARTS = ("model", "fem", "statics", "dynamics", "analysis", "pipeline.py")
-"""The parts of the package whose source decides a calibration's result."""
 
 
 _ANNOUNCE = contextvars.ContextVar("catenary_env_announce_calibrations", default=True)
@@ -74,35 +66,10 @@ class CacheWarning(UserWarning):
     """The uplift cache could not be read or written: the calibration runs (or is kept) in this process."""
 
 
-def cache_folder() -> Path | None:
-    """The folder of the uplift cache, or None when ``CATENARY_ENV_CACHE=off``."""
-    chosen = os.environ.get(CACHE_ENV, "").strip()
-    if chosen.lower() in ("off", "none", "0", "false"):
-        return None
-    if chosen:
-        return Path(chosen).expanduser()
-    base = os.environ.get("XDG_CACHE_HOME", "").strip() or Path.home() / ".cache"
-    return Path(base) / "catenary-env"
-
-
 def cache_file() -> Path | None:
     """The uplift cache file, or None when there is no cache on disk."""
     folder = cache_folder()
     return None if folder is None else folder / FILE_NAME
-
-
-@functools.lru_cache(maxsize=1)
-def simulator_digest() -> str:
-    """A short hash of the simulator's source files (a code change gives a new one)."""
-    root = Path(__file__).resolve().parents[1]
-    digest = hashlib.sha256()
-    for part in SIMULATOR_PARTS:
-        path = root / part
-        files = sorted(path.rglob("*.py")) if path.is_dir() else [path]
-        for file in files:
-            digest.update(str(file.relative_to(root)).encode())
-            digest.update(file.read_bytes())
-    return digest.hexdigest()[:12]
 
 
 def calibration_key(
@@ -113,13 +80,14 @@ def calibration_key(
     fidelity: pipeline.Fidelity,
     target_mean: float,
 ) -> str:
-    """The cache key of a calibration: the model's fingerprint, design, fidelity, speed, target, source."""
-    return pipeline.model_fingerprint(
+    """The cache key of a calibration: the model's fingerprint of the definitions, design, fidelity, speed
+    and target."""
+    return model_fingerprint(
         catenary,
         pantograph,
         design,
         fidelity,
-        {"speed_kmh": float(speed_kmh), "target_mean": float(target_mean), "source": simulator_digest()},
+        {"speed_kmh": float(speed_kmh), "target_mean": float(target_mean)},
     )
 
 
@@ -205,7 +173,7 @@ def _entry(
         "uplift_force_n": force,
         "catenary": catenary.name,
         "pantograph": pantograph.name,
-        "model_fingerprint": pipeline.model_fingerprint(catenary, pantograph),
+        "model_fingerprint": model_fingerprint(catenary, pantograph),
         "speed_kmh": float(speed_kmh),
         "target_mean_n": float(target_mean),
         "fidelity": dataclasses.asdict(fidelity),
