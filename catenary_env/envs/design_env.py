@@ -14,11 +14,11 @@ from gymnasium import spaces
 from numpy.typing import ArrayLike, NDArray
 
 from ..analysis.statistics import ContactStatistics
+from ..calibration_cache import quiet_calibrations
 from ..model.definition import CatenaryDefinition
 from ..model.design import Design, check_speed, physical_warnings
 from ..pipeline import Evaluation, Fidelity, en50367_mean_force
 from ..problems import DesignProblem, get_problem, resolve_fidelity
-from ..problems.calibration_cache import quiet_calibrations
 from ..problems.speeds import SpeedsEvaluation, evaluate_over_speeds
 from .vector_options import VECTOR_KWARGS
 
