@@ -336,7 +336,7 @@ def cmd_static(args: argparse.Namespace) -> int:
 
 def cmd_simulate(args: argparse.Namespace) -> int:
     from .model.design import check_design, check_speed, level_design, physical_warnings
-    from .pipeline import check_fidelity, check_uplift, en50367_mean_force, simulate_static, solve_static
+    from .pipeline import check_fidelity, check_uplift, en50367_mean_force, run_passage, solve_static
 
     _check_outputs(args)
     if args.target_mean is not None and not (math.isfinite(args.target_mean) and args.target_mean > 0.0):
@@ -372,7 +372,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         calibration_time = time.perf_counter() - start
     progress = Progress("simulate", args.json)
     start = time.perf_counter()
-    sim = simulate_static(static, pantograph, speed, fidelity, uplift, progress=progress)
+    sim = run_passage(static, pantograph, speed, fidelity, uplift, progress=progress)
     passage_time = time.perf_counter() - start
     elapsed = shape_time + calibration_time + passage_time
     stats = sim.statistics.as_dict()
