@@ -52,15 +52,15 @@ def en50318():
     return _system("en50318-2002")
 
 
-def _assert_same(fast, reference):
-    assert fast.slack_steps == reference.slack_steps
-    assert fast.unresolved_steps == reference.unresolved_steps == 0
-    np.testing.assert_array_equal(fast.contact_force == 0.0, reference.contact_force == 0.0)
-    assert np.max(np.abs(fast.contact_force - reference.contact_force)) < 1e-8
+def _assert_same(fast, numpy_loop):
+    assert fast.slack_steps == numpy_loop.slack_steps
+    assert fast.unresolved_steps == numpy_loop.unresolved_steps == 0
+    np.testing.assert_array_equal(fast.contact_force == 0.0, numpy_loop.contact_force == 0.0)
+    assert np.max(np.abs(fast.contact_force - numpy_loop.contact_force)) < 1e-8
     for name in ("head_height", "wire_uplift", "support_uplift"):
-        assert np.max(np.abs(getattr(fast, name) - getattr(reference, name))) < 1e-12, name
-    assert np.max(np.abs(fast.dropper_force_min - reference.dropper_force_min)) < 1e-8
-    assert np.max(np.abs(fast.dropper_force_max - reference.dropper_force_max)) < 1e-8
+        assert np.max(np.abs(getattr(fast, name) - getattr(numpy_loop, name))) < 1e-12, name
+    assert np.max(np.abs(fast.dropper_force_min - numpy_loop.dropper_force_min)) < 1e-8
+    assert np.max(np.abs(fast.dropper_force_max - numpy_loop.dropper_force_max)) < 1e-8
 
 
 def test_compiled_passage_equals_the_numpy_backend_with_contact_loss_and_slack_droppers(
@@ -71,12 +71,12 @@ def test_compiled_passage_equals_the_numpy_backend_with_contact_loss_and_slack_d
     speed, dt, uplift, steps = 350 / 3.6, 2e-3, 200.0, 520
     prepared = prepare(system, dt)
     args = (prepared, pantograph, uplift, speed, steps)
-    reference = simulate(*args, backend="numpy")
+    numpy_loop = simulate(*args, backend="numpy")
     fast = simulate(*args, backend="numba")
-    assert reference.slack_steps > 50
-    assert np.sum(reference.contact_force == 0.0) >= 1
-    _assert_same(fast, reference)
-    assert_recorded(recorded_passages, "exact_en50318_numpy", reference)
+    assert numpy_loop.slack_steps > 50
+    assert np.sum(numpy_loop.contact_force == 0.0) >= 1
+    _assert_same(fast, numpy_loop)
+    assert_recorded(recorded_passages, "exact_en50318_numpy", numpy_loop)
     assert_recorded(recorded_passages, "exact_en50318_numba", fast)
 
 
@@ -87,11 +87,11 @@ def test_compiled_passage_in_the_reverse_cuthill_mckee_order(kernels, recorded_p
     prepared = prepare(system, dt)
     assert prepared.factor.perm is not None
     args = (prepared, pantograph, uplift, speed, steps)
-    reference = simulate(*args, backend="numpy")
+    numpy_loop = simulate(*args, backend="numpy")
     fast = simulate(*args, backend="numba")
-    assert reference.slack_steps > 0
-    _assert_same(fast, reference)
-    assert_recorded(recorded_passages, "exact_stitched_numpy", reference)
+    assert numpy_loop.slack_steps > 0
+    _assert_same(fast, numpy_loop)
+    assert_recorded(recorded_passages, "exact_stitched_numpy", numpy_loop)
     assert_recorded(recorded_passages, "exact_stitched_numba", fast)
 
 
@@ -117,9 +117,9 @@ def test_an_unknown_backend_is_refused(en50318):
 def test_without_numba_auto_falls_back_to_numpy_and_numba_says_how_to_install(en50318, monkeypatch):
     system, pantograph = en50318
     args = (prepare(system, 2e-3), pantograph, 150.0, 80.0, 20)
-    reference = simulate(*args, backend="numpy")
+    numpy_loop = simulate(*args, backend="numpy")
     monkeypatch.setattr(passage, "_compiled_kernels", lambda: None)
-    np.testing.assert_array_equal(simulate(*args).contact_force, reference.contact_force)
+    np.testing.assert_array_equal(simulate(*args).contact_force, numpy_loop.contact_force)
     with pytest.raises(ImportError, match="pip install numba"):
         simulate(*args, backend="numba")
 

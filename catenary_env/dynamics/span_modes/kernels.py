@@ -200,6 +200,47 @@ def _rows_axpy(rows, g, count, out, m):  # pragma: no cover - compiled
 
 
 @njit(cache=True, fastmath=FAST)
+def _contact_point(  # pragma: no cover - compiled
+    d, point, ps, k, c, el, rows_q, rows_c, m_qc, comp, g_full, g_modal, e_vec, y, x_b, g_c, h_q, g_dc, gm_dc,
+    rhs_p, y_known,
+):  # fmt: skip
+    """The contact point at step k, on element ``el`` (its rows and responses from :func:`_element_rows` and
+    :func:`_element_responses`): the gap without the step's forces (m) and its compliance (m/N), returned;
+    fills h_q = h rows_q, its couplings to the droppers, with the residual (g_dc) and of the kept modes
+    (gm_dc), and the pantograph's known response y_known."""
+    h = point.shape[k]
+    s_el = d.element_span[el]
+    t_el = d.span_type[s_el]
+    n_q = d.modal_offset[d.span_type.size]
+    # The wire under it: h rows_q (D⁻¹ (e_q + M_qc g_c) + y_q) + h rows_c u_c.
+    off = d.modal_offset[s_el]
+    m = d.kept[c, s_el]
+    inv_d = d.inverse_diagonal[t_el]
+    r0, r1, r2, r3 = rows_q[0], rows_q[1], rows_q[2], rows_q[3]
+    wire = 0.0
+    for i in range(m):
+        hq = h[0] * r0[i] + h[1] * r1[i] + h[2] * r2[i] + h[3] * r3[i]
+        h_q[i] = hq
+        wire += hq * (inv_d[i] * e_vec[off + i] + y[off + i])
+    for j in range(d.n_coupled[t_el]):
+        cj = d.coupled[s_el, j]
+        hm = h[0] * m_qc[0, j] + h[1] * m_qc[1, j] + h[2] * m_qc[2, j] + h[3] * m_qc[3, j]
+        hc = h[0] * rows_c[0, j] + h[1] * rows_c[1, j] + h[2] * rows_c[2, j] + h[3] * rows_c[3, j]
+        wire += hm * g_c[s_el, j] + hc * (x_b[cj] + y[n_q + cj])
+    known_response_in_place(point, d.coefficients, ps, rhs_p, y_known)
+    head = y_known.size - 1
+    gap_known = y_known[head] - point.wire_z[k] - wire
+    c_cc = point.y_star[head]
+    for r in range(4):
+        for cc in range(4):
+            c_cc += h[r] * comp[r, cc] * h[cc]
+    for q in range(g_dc.size):
+        g_dc[q] = g_full[0, q] * h[0] + g_full[1, q] * h[1] + g_full[2, q] * h[2] + g_full[3, q] * h[3]
+        gm_dc[q] = g_modal[0, q] * h[0] + g_modal[1, q] * h[1] + g_modal[2, q] * h[2] + g_modal[3, q] * h[3]
+    return gap_known, c_cc
+
+
+@njit(cache=True, fastmath=FAST)
 def run_steps(d, points, st, first, stop):  # pragma: no cover - compiled  # noqa: C901
     """Steps ``first`` to ``stop - 1`` of the passage, updating the SpanModeState ``st`` in place.
 
@@ -291,32 +332,10 @@ def run_steps(d, points, st, first, stop):  # pragma: no cover - compiled  # noq
             acc = dl_known[q] + _dot(d.dropper_h[c, q], g_c[sd], nc) + _dot(d.dropper_c[q], x_c[sd], nc)
             dl_known[q] = acc + g1 * st.Bu[q] + g2 * st.Bv[q] + g3 * st.Ba[q]
             rate_term[q] = beta * d.droppers.rate[q] * (a1 * st.Bu[q] + a4 * st.Bv[q] + a5 * st.Ba[q])
-        # The contact point: h rows_q (D⁻¹ (e_q + M_qc g_c) + y_q) + h rows_c u_c.
-        off = d.modal_offset[s_el]
-        m = d.kept[c, s_el]
-        inv_d = d.inverse_diagonal[t_el]
-        r0, r1, r2, r3 = rows_q[0], rows_q[1], rows_q[2], rows_q[3]
-        wire = 0.0
-        for i in range(m):
-            hq = h[0] * r0[i] + h[1] * r1[i] + h[2] * r2[i] + h[3] * r3[i]
-            h_q[i] = hq
-            wire += hq * (inv_d[i] * e_vec[off + i] + y[off + i])
-        for j in range(d.n_coupled[t_el]):
-            cj = d.coupled[s_el, j]
-            hm = h[0] * m_qc[0, j] + h[1] * m_qc[1, j] + h[2] * m_qc[2, j] + h[3] * m_qc[3, j]
-            hc = h[0] * rows_c[0, j] + h[1] * rows_c[1, j] + h[2] * rows_c[2, j] + h[3] * rows_c[3, j]
-            wire += hm * g_c[s_el, j] + hc * (x_b[cj] + y[n_q + cj])
-        known_response_in_place(point, cf, ps, rhs_p, y_known)
-        gap_known = y_known[head] - point.wire_z[k] - wire
-        c_cc = point.y_star[head]
-        for r in range(4):
-            for cc in range(4):
-                c_cc += h[r] * comp[r, cc] * h[cc]
-        for q in range(n_drop):
-            g_dc[q] = g_full[0, q] * h[0] + g_full[1, q] * h[1] + g_full[2, q] * h[2] + g_full[3, q] * h[3]
-            gm_dc[q] = (
-                g_modal[0, q] * h[0] + g_modal[1, q] * h[1] + g_modal[2, q] * h[2] + g_modal[3, q] * h[3]
-            )
+        gap_known, c_cc = _contact_point(
+            d, point, ps, k, c, el, rows_q, rows_c, m_qc, comp, g_full, g_modal, e_vec, y, x_b, g_c,
+            h_q, g_dc, gm_dc, rhs_p, y_known,
+        )  # fmt: skip
         # 3. Contact force and slack droppers.
         contact, f, n_slack, resolved = settle_in_place(
             contact,
