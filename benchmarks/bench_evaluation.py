@@ -42,15 +42,16 @@ from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 import numpy as np  # noqa: E402
 
 from catenary_env.analysis.statistics import passage_statistics  # noqa: E402
-from catenary_env.dynamics import kernel_preparation as preparation  # noqa: E402
+from catenary_env.dynamics import exact  # noqa: E402
+from catenary_env.dynamics.exact import kernel_preparation as preparation  # noqa: E402
 from catenary_env.dynamics.linear_system import linearise  # noqa: E402
-from catenary_env.dynamics.passage import prepare_passage, simulate_passage  # noqa: E402
-from catenary_env.dynamics.reduced_passage import simulate_reduced_passage  # noqa: E402
+from catenary_env.dynamics.models import DYNAMIC_MODELS  # noqa: E402
+from catenary_env.dynamics.protocol import Passage  # noqa: E402
 from catenary_env.fem.layout import Layout, build_layout  # noqa: E402
 from catenary_env.model.definition import CatenaryDefinition  # noqa: E402
 from catenary_env.model.design import level_design, presag_design  # noqa: E402
 from catenary_env.model.presets import load_catenary, load_pantograph  # noqa: E402
-from catenary_env.pipeline import Fidelity, analysis_window, evaluate, prepare_dynamics  # noqa: E402
+from catenary_env.pipeline import Fidelity, analysis_window, evaluate  # noqa: E402
 from catenary_env.statics.shape_finding import find_shape  # noqa: E402
 
 PHASES = ("shape_finding", "linearisation", "preparation", "passage", "statistics")
@@ -95,20 +96,12 @@ def one_evaluation(
     phases.lap("shape_finding")
     system = linearise(static)
     phases.lap("linearisation")
-    prepared = prepare_dynamics(system, fidelity)
+    model = DYNAMIC_MODELS[fidelity.dynamics]
+    prepared = model.prepare(system, fidelity)
     phases.lap("preparation")
-    if fidelity.dynamics == "exact":
-        trajectory = simulate_passage(
-            system,
-            pantograph,
-            uplift,
-            speed_kmh / 3.6,
-            fidelity.time_step,
-            prepared=prepared,
-            backend=backend,
-        )
-    else:
-        trajectory = simulate_reduced_passage(prepared, pantograph, uplift, speed_kmh / 3.6, backend=backend)
+    trajectory = model.run(
+        prepared, Passage.one_pantograph(pantograph, uplift, speed_kmh / 3.6, backend=backend)
+    )
     phases.lap("passage")
     window = analysis_window(catenary, Fidelity(n_spans=n_spans, analysis_spans=max(1, n_spans // 2)))
     stats = passage_statistics(trajectory, window)
@@ -142,21 +135,14 @@ def backend_comparison(
     catenary = load_catenary(preset)
     pantograph = load_pantograph(catenary.pantograph)
     system = linearise(find_shape(level_layout(catenary, n_spans, fidelity)))
-    prepared = prepare_passage(system, fidelity.time_step)
+    prepared = exact.prepare(system, fidelity)
     times: dict[str, list[float]] = {"numba": [], "numpy": []}
     forces = {}
     for _ in range(runs):
         for backend in times:
             t = time.perf_counter()
-            trajectory = simulate_passage(
-                system,
-                pantograph,
-                uplift,
-                speed_kmh / 3.6,
-                fidelity.time_step,
-                prepared=prepared,
-                backend=backend,
-            )
+            passage = Passage.one_pantograph(pantograph, uplift, speed_kmh / 3.6, backend=backend)
+            trajectory = exact.run(prepared, passage)
             times[backend].append(time.perf_counter() - t)
             forces[backend] = trajectory.contact_force
     numba, numpy = statistics.median(times["numba"]), statistics.median(times["numpy"])
@@ -176,13 +162,12 @@ def solve_floor(preset: str, n_spans: int, fidelity: Fidelity, calls: int = 200)
     Every step of the exact method solves the whole section once, so this is a floor under the
     passage's time per step, whatever else the loop does. None without numba.
     """
-    from catenary_env.dynamics.passage import _compiled_kernels
-
-    kernels = _compiled_kernels()
-    if kernels is None:
+    try:
+        from catenary_env.dynamics.exact import kernels
+    except ImportError:
         return None
     system = linearise(find_shape(level_layout(load_catenary(preset), n_spans, fidelity)))
-    factor = prepare_passage(system, fidelity.time_step).factor
+    factor = exact.prepare(system, fidelity).factor
     w = preparation.padded_width(factor.bandwidth)
     unit = preparation.unit_factor(factor.factor, w)
     n = factor.factor.shape[1]

@@ -19,17 +19,13 @@ from numpy.typing import NDArray
 
 from .analysis.statistics import ContactStatistics, filtered_contact_force, passage_statistics
 from .blas_threads import single_threaded
+from .dynamics.exact import PreparedExact
 from .dynamics.linear_system import LinearSystem, linearise
+from .dynamics.models import DYNAMIC_MODELS
 from .dynamics.newmark import Trajectory
-from .dynamics.oracle import simulate_passage_reference
 from .dynamics.pantograph import frame_force
-from .dynamics.passage import PreparedPassage, prepare_passage, simulate_passage
-from .dynamics.reduced_passage import (
-    PreparedReducedPassage,
-    prepare_reduced_passage,
-    simulate_reduced_passage,
-)
-from .dynamics.span_modes import reduce_system
+from .dynamics.protocol import ContactPoint, Passage
+from .dynamics.span_modes import PreparedSpanModes
 from .fem.layout import build_layout
 from .model.definition import CatenaryDefinition, PantographDefinition
 from .model.design import Design, DesignError, check_design, check_speed
@@ -42,7 +38,7 @@ FAR_CUTOFF = 50.0
 """Hz: modes kept in the spans away from the pantograph."""
 NEAR_SPANS = 2
 """Spans on each side of the pantograph's that keep the near cut-off (the convergence study)."""
-DYNAMICS = ("span-modes", "exact")
+DYNAMICS = tuple(DYNAMIC_MODELS)
 
 
 @dataclass(frozen=True)
@@ -236,7 +232,7 @@ def check_uplift(pantograph: PantographDefinition, uplift_force: float | None) -
     return force
 
 
-def simulate_static(
+def run_passage(
     static: StaticSolution,
     pantograph: PantographDefinition,
     speed: float,
@@ -244,35 +240,30 @@ def simulate_static(
     uplift_force: float,
     system: LinearSystem | None = None,
     progress: Callable[[float], None] | None = None,
-    prepared: PreparedPassage | PreparedReducedPassage | None = None,
+    prepared: PreparedExact | PreparedSpanModes | None = None,
     statistics_only: bool = False,
 ) -> Simulation:
-    """Dynamic passage over a solved static state (the design must be statically feasible).
+    """The pantograph's dynamic passage at ``speed`` (m/s) over a solved static state (the design must be
+    statically feasible), on the fidelity's dynamic model
+    (:data:`~catenary_env.dynamics.models.DYNAMIC_MODELS`).
 
     ``system`` and ``prepared`` (from :func:`prepare_dynamics`) may be passed to reuse them across
     passages. With ``statistics_only``, the span-mode model stops one span after the analysis
     section: nothing later changes the statistics (the zero-phase filter's end effect has decayed
     over that span), and the trajectory ends there. The force on the pantograph's frame follows the
     catenary's ``modelling.uplift_definition``; a system that is not Rayleigh-damped
-    (:attr:`LinearSystem.rayleigh`) runs the straightforward exact loop, minutes rather than seconds.
+    (:attr:`LinearSystem.rayleigh`) runs the exact model's straightforward loop (its oracle), minutes rather
+    than seconds.
     """
     catenary = static.layout.catenary
     system = linearise(static) if system is None else system
-    force = frame_force(system, pantograph, uplift_force)
     if not system.rayleigh:
         check_fidelity(catenary, fidelity)  # the span-mode model refuses it
-        trajectory = simulate_passage_reference(system, pantograph, force, speed, fidelity.time_step)
-    else:
-        prepared = prepare_dynamics(system, fidelity) if prepared is None else prepared
-        if isinstance(prepared, PreparedReducedPassage):
-            n_steps = _statistics_steps(catenary, fidelity, speed) if statistics_only else None
-            trajectory = simulate_reduced_passage(
-                prepared, pantograph, force, speed, n_steps=n_steps, progress=progress
-            )
-        else:
-            trajectory = simulate_passage(
-                system, pantograph, force, speed, fidelity.time_step, progress=progress, prepared=prepared
-            )
+    model = DYNAMIC_MODELS[fidelity.dynamics]
+    prepared = model.prepare(system, fidelity) if prepared is None else prepared
+    n_steps = _statistics_steps(catenary, fidelity, speed) if statistics_only and model.stops_early else None
+    point = ContactPoint(pantograph, frame_force(system, pantograph, uplift_force))
+    trajectory = model.run(prepared, Passage(speed, (point,), n_steps=n_steps, progress=progress))
     window = analysis_window(catenary, fidelity)
     filtered = filtered_contact_force(trajectory)
     stats = passage_statistics(trajectory, window, filtered)
@@ -285,18 +276,11 @@ def _statistics_steps(catenary: CatenaryDefinition, fidelity: Fidelity, speed: f
     return int(np.floor(end / (speed * fidelity.time_step))) + 1
 
 
-def prepare_dynamics(
-    system: LinearSystem, fidelity: Fidelity
-) -> PreparedPassage | PreparedReducedPassage | None:
-    """The design's part of the passage for the fidelity's model: the exact method's factorisation, or
-    the span modes and their Schur complements (docs/performance.md, 'Model fidelities'); None for a
-    system the fast loops do not integrate (:attr:`LinearSystem.rayleigh`)."""
-    if not system.rayleigh:
-        return None
-    if fidelity.dynamics == "exact":
-        return prepare_passage(system, fidelity.time_step)
-    reduced = reduce_system(system, fidelity.near_cutoff, fidelity.far_cutoff)
-    return prepare_reduced_passage(reduced, fidelity.time_step, fidelity.near_spans)
+def prepare_dynamics(system: LinearSystem, fidelity: Fidelity) -> PreparedExact | PreparedSpanModes:
+    """The design's part of the passage on the fidelity's model: the exact model's factorisation (none for a
+    system only its straightforward loop integrates, :attr:`LinearSystem.rayleigh`), or the span modes and
+    their Schur complements (docs/performance.md, 'Model fidelities')."""
+    return DYNAMIC_MODELS[fidelity.dynamics].prepare(system, fidelity)
 
 
 @single_threaded
@@ -326,7 +310,7 @@ def simulate(
     reason = static.infeasibility()
     if reason:
         raise ValueError(f"design is infeasible: {reason}")
-    return simulate_static(static, pantograph, speed, fidelity, force, progress=progress)
+    return run_passage(static, pantograph, speed, fidelity, force, progress=progress)
 
 
 def evaluate(
@@ -375,7 +359,7 @@ def evaluate_unchecked(
     reason = static.infeasibility()
     if reason:
         return Evaluation(False, reason, None, lengths, forces, force, time.perf_counter() - start)
-    sim = simulate_static(static, pantograph, speed, fidelity, force, statistics_only=True)
+    sim = run_passage(static, pantograph, speed, fidelity, force, statistics_only=True)
     stats = sim.statistics
     if stats.contact_loss_percent > 0.0:
         reason = (
@@ -437,7 +421,7 @@ def calibrate_uplift(
     prepared = prepare_dynamics(system, fidelity)
 
     def mean_force(uplift: float) -> float:
-        return simulate_static(
+        return run_passage(
             static, pantograph, speed, fidelity, uplift, system, prepared=prepared, statistics_only=True
         ).statistics.mean
 

@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import importlib.util
 import os
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 from catenary_env.model.design import level_design
@@ -55,3 +57,31 @@ def benchmark_static(benchmark_catenary) -> StaticSolution:
 @pytest.fixture(scope="session")
 def stitched_static(stitched_catenary) -> StaticSolution:
     return solve_static(stitched_catenary, level_design(stitched_catenary), SHORT)
+
+
+RECORDED_PASSAGES = Path(__file__).parent / "data" / "recorded_passages.npz"
+"""Contact forces (N), slack steps and σ (N) of a few passages, recorded before the passage protocol
+(commit 1d5cdd7): a refactoring of the time loops must reproduce them (:func:`assert_recorded`)."""
+
+RECORDED_TOLERANCE = 1e-9
+"""N: the loops' rounding on the machine that recorded them (the compiled loop of one commit against
+another's differs by up to 7.5e-10 N; the numpy loops by nothing). A compiler or processor that orders
+the compiled sums otherwise may need more, never what a change of the physics shows (1e-6 N and up)."""
+
+
+@pytest.fixture(scope="session")
+def recorded_passages() -> dict[str, np.ndarray]:
+    with np.load(RECORDED_PASSAGES) as data:
+        return dict(data)
+
+
+def assert_recorded(
+    recorded: dict[str, np.ndarray], case: str, trajectory, sigma: float | None = None
+) -> None:
+    """``trajectory`` (and its σ, N) equal the recorded ``case`` to :data:`RECORDED_TOLERANCE`."""
+    force = recorded[f"{case}/contact_force"]
+    assert trajectory.contact_force.shape == force.shape, case
+    assert np.max(np.abs(trajectory.contact_force - force)) < RECORDED_TOLERANCE, case
+    assert trajectory.slack_steps == int(recorded[f"{case}/slack_steps"]), case
+    if sigma is not None:
+        assert sigma == pytest.approx(float(recorded[f"{case}/sigma"]), rel=0.0, abs=RECORDED_TOLERANCE), case

@@ -10,13 +10,14 @@ import pytest
 import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
+from catenary_env.dynamics import exact
 from catenary_env.dynamics.linear_system import linearise
 from catenary_env.dynamics.newmark import NewmarkConstants
-from catenary_env.dynamics.oracle import simulate_passage_reference
-from catenary_env.dynamics.passage import simulate_passage
+from catenary_env.dynamics.protocol import Passage
 from catenary_env.fem.layout import CONTACT, build_layout
 from catenary_env.model.design import Design, level_design
 from catenary_env.model.presets import load_catenary, load_pantograph
+from catenary_env.pipeline import Fidelity
 from catenary_env.statics.shape_finding import find_shape
 
 
@@ -26,15 +27,18 @@ def test_fast_method_equals_the_straightforward_method_with_contact_loss_and_sla
     system = linearise(find_shape(build_layout(catenary, level_design(catenary), 3, 2.0, 4.0)))
     # A high uplift at 350 km/h: droppers go slack under the pantograph and the head leaves the wire.
     speed, dt, uplift, steps = 350 / 3.6, 2e-3, 200.0, 520
-    reference = simulate_passage_reference(system, pantograph, uplift, speed, dt, n_steps=steps)
-    fast = simulate_passage(system, pantograph, uplift, speed, dt, n_steps=steps)
-    assert reference.slack_steps > 50
-    assert np.sum(reference.contact_force == 0.0) >= 1
-    assert reference.unresolved_steps == 0 and fast.unresolved_steps == 0
-    assert np.max(np.abs(fast.contact_force - reference.contact_force)) < 1e-6
-    assert np.max(np.abs(fast.support_uplift - reference.support_uplift)) < 1e-9
-    assert np.max(np.abs(fast.head_height - reference.head_height)) < 1e-9
-    assert np.allclose(fast.dropper_force_min, reference.dropper_force_min, atol=1e-6)
+    prepared = exact.prepare(system, Fidelity(time_step=dt))
+    oracle = exact.run(
+        prepared, Passage.one_pantograph(pantograph, uplift, speed, n_steps=steps, backend="oracle")
+    )
+    fast = exact.run(prepared, Passage.one_pantograph(pantograph, uplift, speed, n_steps=steps))
+    assert oracle.slack_steps > 50
+    assert np.sum(oracle.contact_force == 0.0) >= 1
+    assert oracle.unresolved_steps == 0 and fast.unresolved_steps == 0
+    assert np.max(np.abs(fast.contact_force - oracle.contact_force)) < 1e-6
+    assert np.max(np.abs(fast.support_uplift - oracle.support_uplift)) < 1e-9
+    assert np.max(np.abs(fast.head_height - oracle.head_height)) < 1e-9
+    assert np.allclose(fast.dropper_force_min, oracle.dropper_force_min, atol=1e-6)
 
 
 def test_newmark_converges_at_second_order_on_a_linear_oscillator():

@@ -206,6 +206,19 @@ def test_no_import_cycle() -> None:
     assert not cycles, "modules that import each other: " + "; ".join(" <-> ".join(c) for c in cycles)
 
 
+def test_the_two_dynamic_models_do_not_import_each_other() -> None:
+    # Each model's preparation, loops and kernels stand on the shared dynamics modules only.
+    models = ("catenary_env.dynamics.exact", "catenary_env.dynamics.span_modes")
+    crossing = [
+        f"{MODULES[module].relative_to(ROOT)}:{line}: {module} imports {target}"
+        for module, edges in import_graph().items()
+        for target, line in edges.items()
+        for own, other in (models, models[::-1])
+        if module.startswith(own) and (target == other or target.startswith(other + "."))
+    ]
+    assert not crossing, "one dynamic model imports the other:\n" + "\n".join(crossing)
+
+
 @pytest.mark.parametrize(
     ("source", "expected"),
     [

@@ -12,16 +12,17 @@ import numpy as np
 import pytest
 import scipy.sparse.linalg as spla
 
+from catenary_env.dynamics import exact
 from catenary_env.dynamics.linear_system import LinearSystem, linearise
-from catenary_env.dynamics.oracle import simulate_passage_reference
 from catenary_env.dynamics.pantograph import STATIC_POINTS, frame_force, pantograph_matrices
+from catenary_env.dynamics.protocol import Passage
 from catenary_env.fem.layout import CONTACT, build_layout
 from catenary_env.fingerprint import model_fingerprint
 from catenary_env.model.definition import DefinitionError
 from catenary_env.model.design import DesignError, level_design
 from catenary_env.model.options import CHOICES, ModellingOptions
 from catenary_env.model.presets import load_catenary, load_pantograph, preset_path
-from catenary_env.pipeline import FIDELITIES, simulate
+from catenary_env.pipeline import FIDELITIES, Fidelity, simulate
 from catenary_env.statics.shape_finding import find_shape
 from catenary_env.validation import QUANTITIES, load_ranges
 
@@ -207,7 +208,10 @@ def test_a_slack_dropper_that_keeps_its_damping_changes_the_passage_only_once_a_
     def passages(n_steps: int):
         # As the oracle's own test: 350 km/h and a high uplift slacken droppers under the pantograph.
         return [
-            simulate_passage_reference(s, pantograph, 200.0, 350 / 3.6, 2e-3, n_steps=n_steps)
+            exact.run(
+                exact.prepare(s, Fidelity(time_step=2e-3)),
+                Passage.one_pantograph(pantograph, 200.0, 350 / 3.6, n_steps=n_steps, backend="oracle"),
+            )
             for s in systems
         ]
 

@@ -11,12 +11,14 @@ import dataclasses
 
 import numpy as np
 import pytest
+from conftest import assert_recorded
 
+from catenary_env.dynamics import exact as exact_model
 from catenary_env.dynamics import span_modes
 from catenary_env.dynamics.linear_system import linearise
-from catenary_env.dynamics.passage import simulate_passage
-from catenary_env.dynamics.reduced_passage import prepare_reduced_passage, simulate_reduced_passage
-from catenary_env.dynamics.span_modes import reduce_system, reduced_matrices
+from catenary_env.dynamics.protocol import Passage
+from catenary_env.dynamics.span_modes import reduction
+from catenary_env.dynamics.span_modes.reduction import reduce_system, reduced_matrices
 from catenary_env.fem.layout import build_layout
 from catenary_env.model.design import Design, DesignError, level_design
 from catenary_env.model.options import FORMER_DEFAULTS, ModellingOptions
@@ -25,6 +27,19 @@ from catenary_env.statics.shape_finding import find_shape
 
 SPEED = 300 / 3.6
 DT = 2e-3
+
+
+def simulate_exact(system, pantograph, uplift, speed, **options):
+    """The exact passage of one pantograph, frame force ``uplift`` (N)."""
+    return exact_model.run(
+        exact_model.prepare(system, Fidelity(time_step=DT)),
+        Passage.one_pantograph(pantograph, uplift, speed, **options),
+    )
+
+
+def simulate_reduced(prepared, pantograph, uplift, speed, **options):
+    """The span-mode passage of one pantograph, frame force ``uplift`` (N)."""
+    return span_modes.run(prepared, Passage.one_pantograph(pantograph, uplift, speed, **options))
 
 
 @pytest.fixture(scope="module")
@@ -39,12 +54,12 @@ def system(benchmark_catenary):
 
 @pytest.fixture(scope="module")
 def exact(system, benchmark_pantograph_definition):
-    return simulate_passage(system, benchmark_pantograph_definition, 190.0, SPEED, DT, backend="numpy")
+    return simulate_exact(system, benchmark_pantograph_definition, 190.0, SPEED, backend="numpy")
 
 
 @pytest.fixture(scope="module")
 def full_basis(system):
-    return prepare_reduced_passage(reduce_system(system, np.inf), DT, near_spans=1)
+    return span_modes.prepare_reduced(reduce_system(system, np.inf), DT, near_spans=1)
 
 
 def test_interior_spans_share_one_eigensolution(system):
@@ -68,9 +83,7 @@ def test_reduced_matrices_are_the_projection(system):
 
 
 def test_every_mode_kept_equals_the_exact_passage(full_basis, exact, benchmark_pantograph_definition):
-    reduced = simulate_reduced_passage(
-        full_basis, benchmark_pantograph_definition, 190.0, SPEED, backend="numpy"
-    )
+    reduced = simulate_reduced(full_basis, benchmark_pantograph_definition, 190.0, SPEED, backend="numpy")
     assert exact.slack_steps > 50  # the case exercises slack droppers
     assert reduced.slack_steps == exact.slack_steps
     assert np.abs(reduced.contact_force - exact.contact_force).max() < 1e-5
@@ -81,8 +94,8 @@ def test_every_mode_kept_equals_the_exact_passage(full_basis, exact, benchmark_p
 def test_contact_loss_is_handled_as_in_the_exact_passage(system, full_basis, benchmark_pantograph_definition):
     # A weak uplift at 350 km/h: the pantograph leaves the wire.
     pantograph = benchmark_pantograph_definition
-    exact = simulate_passage(system, pantograph, 60.0, 350 / 3.6, DT, backend="numpy")
-    reduced = simulate_reduced_passage(full_basis, pantograph, 60.0, 350 / 3.6, backend="numpy")
+    exact = simulate_exact(system, pantograph, 60.0, 350 / 3.6, backend="numpy")
+    reduced = simulate_reduced(full_basis, pantograph, 60.0, 350 / 3.6, backend="numpy")
     lost = exact.contact_force == 0.0
     assert lost.sum() > 10
     assert np.array_equal(reduced.contact_force == 0.0, lost)
@@ -95,24 +108,24 @@ def test_the_reduced_model_approaches_the_exact_one_as_the_cutoff_rises(
     window = slice(exact.time.size // 3, 2 * exact.time.size // 3)
     errors = []
     for cutoff in (100.0, 200.0, 400.0):
-        prepared = prepare_reduced_passage(reduce_system(system, cutoff), DT, near_spans=1)
-        reduced = simulate_reduced_passage(
-            prepared, benchmark_pantograph_definition, 190.0, SPEED, backend="numpy"
-        )
+        prepared = span_modes.prepare_reduced(reduce_system(system, cutoff), DT, near_spans=1)
+        reduced = simulate_reduced(prepared, benchmark_pantograph_definition, 190.0, SPEED, backend="numpy")
         difference = reduced.contact_force[window] - exact.contact_force[window]
         errors.append(np.sqrt(np.mean(difference**2)) / np.std(exact.contact_force[window]))
     assert errors[0] > errors[1] > errors[2]
     assert errors[2] < 0.05
 
 
-def test_compiled_loop_equals_the_numpy_loop(system, benchmark_pantograph_definition):
+def test_compiled_loop_equals_the_numpy_loop(system, benchmark_pantograph_definition, recorded_passages):
     pytest.importorskip("numba")
-    prepared = prepare_reduced_passage(reduce_system(system, 300.0, 50.0), DT, near_spans=1)
-    a = simulate_reduced_passage(prepared, benchmark_pantograph_definition, 190.0, SPEED, backend="numpy")
-    b = simulate_reduced_passage(prepared, benchmark_pantograph_definition, 190.0, SPEED, backend="numba")
-    assert np.abs(a.contact_force - b.contact_force).max() < 1e-7
+    prepared = span_modes.prepare_reduced(reduce_system(system, 300.0, 50.0), DT, near_spans=1)
+    a = simulate_reduced(prepared, benchmark_pantograph_definition, 190.0, SPEED, backend="numpy")
+    b = simulate_reduced(prepared, benchmark_pantograph_definition, 190.0, SPEED, backend="numba")
+    assert np.abs(a.contact_force - b.contact_force).max() < 1e-9
     assert np.abs(a.wire_uplift - b.wire_uplift).max() < 1e-10
     assert a.slack_steps == b.slack_steps
+    assert_recorded(recorded_passages, "span_modes_300_numpy", a)
+    assert_recorded(recorded_passages, "span_modes_300_numba", b)
 
 
 def test_fidelities_name_both_models():
@@ -150,15 +163,15 @@ def test_pipeline_runs_the_span_mode_model(benchmark_catenary, benchmark_pantogr
 def test_evaluation_stops_one_span_after_the_analysis_section_without_changing_it(
     benchmark_catenary, benchmark_pantograph_definition
 ):
-    from catenary_env.pipeline import simulate_static, solve_static
+    from catenary_env.pipeline import run_passage, solve_static
 
     fidelity = Fidelity(
         n_spans=7, analysis_spans=3, contact_wire_element=1.0, messenger_wire_element=2.0, time_step=2e-3
     )
     static = solve_static(benchmark_catenary, level_design(benchmark_catenary), fidelity)
     args = (static, benchmark_pantograph_definition, SPEED, fidelity, 190.0)
-    whole = simulate_static(*args)
-    short = simulate_static(*args, statistics_only=True)
+    whole = run_passage(*args)
+    short = run_passage(*args, statistics_only=True)
     assert short.trajectory.position[-1] == pytest.approx(6 * benchmark_catenary.span_length, abs=1.0)
     for name, value in whole.statistics.as_dict().items():
         assert getattr(short.statistics, name) == pytest.approx(value, rel=1e-6, abs=1e-9), name
@@ -171,19 +184,19 @@ def test_evaluation_stops_one_span_after_the_analysis_section_without_changing_i
 def _plain(monkeypatch, system, *args):
     """reduce_system with every span's eigenproblem solved as it is (no mirror images)."""
     with monkeypatch.context() as patch:
-        patch.setattr(span_modes, "find_mirror", lambda *a, **k: None)
+        patch.setattr(reduction, "find_mirror", lambda *a, **k: None)
         return reduce_system(system, *args)
 
 
 def test_mirror_images_give_the_same_modes(system, monkeypatch):
     mirrors = []
-    found = span_modes.find_mirror
+    found = reduction.find_mirror
 
     def spy(*args):
         mirrors.append((args[1] is args[2], found(*args) is not None))
         return found(*args)
 
-    monkeypatch.setattr(span_modes, "find_mirror", spy)
+    monkeypatch.setattr(reduction, "find_mirror", spy)
     mirrored = reduce_system(system, 300.0, 50.0)
     monkeypatch.undo()
     # the interior span is its own mirror image, the last span the first one's
@@ -206,9 +219,9 @@ def test_the_passage_with_mirrored_modes_equals_the_plain_one(
 ):
     runs = []
     for reduced in (reduce_system(system, 300.0, 50.0), _plain(monkeypatch, system, 300.0, 50.0)):
-        prepared = prepare_reduced_passage(reduced, DT, near_spans=1)
+        prepared = span_modes.prepare_reduced(reduced, DT, near_spans=1)
         runs.append(
-            simulate_reduced_passage(prepared, benchmark_pantograph_definition, 190.0, SPEED, backend="numpy")
+            simulate_reduced(prepared, benchmark_pantograph_definition, 190.0, SPEED, backend="numpy")
         )
     a, b = runs
     assert a.slack_steps == b.slack_steps > 50
@@ -218,15 +231,15 @@ def test_the_passage_with_mirrored_modes_equals_the_plain_one(
 
 
 def _own_mirror(system, span):
-    internal, b, coupled = span_modes.split_spans(system)
+    internal, b, coupled = reduction.split_spans(system)
     dofs = internal[span]
     rows = tuple(
-        span_modes.submatrix(x.tocsr(), dofs, np.r_[dofs, b[coupled[span]]])
+        reduction.submatrix(x.tocsr(), dofs, np.r_[dofs, b[coupled[span]]])
         for x in (system.stiffness, system.mass)
     )
     dense = tuple(x.toarray()[:, : dofs.size] for x in rows)
     axis = (span + 0.5) * system.static.layout.span_length
-    return span_modes.find_mirror(system, dofs, dofs, axis, dense, rows)
+    return reduction.find_mirror(system, dofs, dofs, axis, dense, rows)
 
 
 def test_a_span_that_is_not_symmetric_is_not_mirrored(system, benchmark_catenary):
@@ -255,4 +268,4 @@ def test_submatrix_equals_scipy_indexing(system):
     rng = np.random.default_rng(3)
     rows = np.sort(rng.choice(system.n_dofs, 40, replace=False))
     cols = rng.permutation(system.n_dofs)[:300]
-    assert np.array_equal(span_modes.submatrix(K, rows, cols).toarray(), K[rows][:, cols].toarray())
+    assert np.array_equal(reduction.submatrix(K, rows, cols).toarray(), K[rows][:, cols].toarray())

@@ -57,7 +57,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Simulate the passage and print its statistics (text or JSON); 0."""
     from ..model.design import check_design, check_speed, physical_warnings
-    from ..pipeline import check_fidelity, check_uplift, simulate_static, solve_static
+    from ..pipeline import check_fidelity, check_uplift, run_passage, solve_static
 
     options.check_plot(args)
     if args.target_mean is not None and not (math.isfinite(args.target_mean) and args.target_mean > 0.0):
@@ -88,7 +88,7 @@ def run(args: argparse.Namespace) -> int:
         times["calibration_time"] = time.perf_counter() - start
     progress = ProgressDisplay("simulate", 1.0, quiet=args.json)
     start = time.perf_counter()
-    sim = simulate_static(static, pantograph, speed, fidelity, uplift, progress=progress.fraction)
+    sim = run_passage(static, pantograph, speed, fidelity, uplift, progress=progress.fraction)
     progress.finish()
     times["passage_time"] = time.perf_counter() - start
     result = _record(args, catenary, pantograph, fidelity, sim, calibrate, times)

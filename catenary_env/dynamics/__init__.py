@@ -1,1 +1,2 @@
-"""The linearised dynamics about the static state, the pantograph, Newmark and the passage backends."""
+"""The linearised dynamics about the static state, the pantograph, Newmark, and the two dynamic models
+(``exact/``, ``span_modes/``) behind one passage protocol (:mod:`.protocol`, the table :mod:`.models`)."""

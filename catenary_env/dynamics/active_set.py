@@ -7,8 +7,10 @@ the one-step compliances (the contact point's ``c_cc``, the droppers' ``g_dc`` t
 their whole linear force (spring and damping share). Each step is a linear complementarity problem
 with a P-matrix, so its solution is unique; the iteration below finds it.
 
-The numpy loops call :func:`settle`; the compiled ones (``_kernels._settle``) follow the same rules
-with these constants.
+The rules are written here only, twice side by side: :func:`settle` in numpy for the numpy loops and
+:func:`settle_in_place` in scalar loops, which numba compiles into both models' compiled loops
+(:mod:`~catenary_env.dynamics.compilable`). A change of the contact or slack-dropper rule changes both, here;
+the numba = numpy tests hold them together (to 1e-9 N).
 """
 
 from __future__ import annotations
@@ -16,6 +18,8 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+
+from .compilable import compilable
 
 MAX_ACTIVE_SET_ITERATIONS = 40
 FULL_SWITCH_ITERATIONS = 8
@@ -46,6 +50,21 @@ def switch_states(
     worst = int(np.argmax(violation))
     slack[worst] = not slack[worst]
     return contact, slack
+
+
+class Droppers(NamedTuple):
+    """The droppers as the active set sees them (D,): spring rates k (N/m), static forces N₀ (N) and
+    κ = k (1 + β a1) (N/m), the rate of their whole linear force in a step's elongation."""
+
+    rate: np.ndarray
+    force: np.ndarray
+    kappa: np.ndarray
+
+    @classmethod
+    def for_step(cls, rate: np.ndarray, force: np.ndarray, beta: float, a1: float) -> Droppers:
+        """For the system's rates and static forces, Rayleigh β (s) and Newmark's a1 (1/s)."""
+        rate = np.asarray(rate, dtype=float)
+        return cls(rate, np.asarray(force, dtype=float), rate * (1.0 + beta * a1))
 
 
 class Settled(NamedTuple):
@@ -83,8 +102,7 @@ def settle(
     dl_known: np.ndarray,
     rate_term: np.ndarray,
     contact_stiffness: float,
-    kappa: np.ndarray,
-    static_force: np.ndarray,
+    droppers: Droppers,
     flexibility: np.ndarray,
 ) -> Settled:
     """The contact force and slack droppers of one step, starting from the last step's state.
@@ -101,12 +119,11 @@ def settle(
         The droppers' elongations without the step's forces, m, and their damping share, N.
     contact_stiffness : float
         k_h, N/m.
-    kappa, static_force : ndarray (D,)
-        k (1 + β a1), N/m, and the static forces N₀, N.
+    droppers : Droppers
     flexibility : ndarray (D, D)
         G, dropper elongations per unit dropper force, m/N.
     """
-    kh, N0, G = contact_stiffness, static_force, flexibility
+    kh, N0, kappa, G = contact_stiffness, droppers.force, droppers.kappa, flexibility
     resolved = False
     for iteration in range(MAX_ACTIVE_SET_ITERATIONS):
         idx = np.flatnonzero(slack)
@@ -133,3 +150,122 @@ def settle(
             break
         contact, slack = switch_states(contact, slack, new_contact, new_slack, kh * gap, elastic, iteration)
     return Settled(contact, slack, float(f), idx, lam, elastic, resolved)
+
+
+@compilable()
+def settle_workspace(n_droppers):  # noqa: ANN001, ANN201 - compilable
+    """The arrays :func:`settle_in_place` works in, for ``n_droppers`` droppers: A, r, λ, the slack
+    indices, the droppers' forces and the new slack states."""
+    return (
+        np.zeros((n_droppers + 1, n_droppers + 1)),
+        np.zeros(n_droppers + 1),
+        np.zeros(n_droppers),
+        np.zeros(n_droppers, dtype=np.int64),
+        np.zeros(n_droppers),
+        np.zeros(n_droppers, dtype=np.bool_),
+    )
+
+
+@compilable()
+def _small_solve(A, r, size):  # noqa: ANN001, ANN202 - compilable
+    """Gaussian elimination with partial pivoting on A[:size, :size]; the solution overwrites r."""
+    for col in range(size):
+        p = col
+        for i in range(col + 1, size):
+            if abs(A[i, col]) > abs(A[p, col]):
+                p = i
+        if p != col:
+            for j in range(size):
+                A[col, j], A[p, j] = A[p, j], A[col, j]
+            r[col], r[p] = r[p], r[col]
+        for i in range(col + 1, size):
+            factor = A[i, col] / A[col, col]
+            for j in range(col, size):
+                A[i, j] -= factor * A[col, j]
+            r[i] -= factor * r[col]
+    for i in range(size - 1, -1, -1):
+        s = r[i]
+        for j in range(i + 1, size):
+            s -= A[i, j] * r[j]
+        r[i] = s / A[i, i]
+
+
+@compilable()
+def _step_system(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, droppers, G, work):  # noqa: ANN001, ANN202
+    """Fill A, r of :func:`settle`'s system for the current states and solve it; returns f and m (λ and the
+    slack droppers' indices in ``work``)."""
+    A, r, lam, idx = work[0], work[1], work[2], work[3]
+    kappa, N0 = droppers.kappa, droppers.force
+    m = 0
+    for q in range(slack.size):
+        if slack[q]:
+            idx[m] = q
+            m += 1
+    for i in range(m + 1):
+        for j in range(m + 1):
+            A[i, j] = 1.0 if i == j else 0.0
+        r[i] = 0.0
+    if contact:
+        A[0, 0] = 1.0 + kh * c_cc
+        for i in range(m):
+            A[0, 1 + i] = kh * g_dc[idx[i]]
+        r[0] = kh * gap_known
+    for i in range(m):
+        q = idx[i]
+        A[1 + i, 0] = -kappa[q] * g_dc[q]
+        for j in range(m):
+            A[1 + i, 1 + j] -= kappa[q] * G[q, idx[j]]
+        r[1 + i] = N0[q] + kappa[q] * dl_known[q] - rate_term[q]
+    if m:
+        _small_solve(A, r, m + 1)
+    else:
+        r[0] = r[0] / A[0, 0]
+    for i in range(m):
+        lam[i] = r[1 + i]
+    return r[0], m
+
+
+@compilable()
+def settle_in_place(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, droppers, G, work):  # noqa: ANN001, ANN201
+    """:func:`settle` in scalar loops, for the compiled loops; ``work`` from :func:`settle_workspace`.
+
+    Returns (contact, f, m, resolved); ``slack`` is updated in place, and ``work`` holds λ and the slack
+    droppers' indices in ``lam[:m]``, ``idx[:m]``, and the droppers' forces in ``elastic``.
+    """
+    lam, idx, elastic, new_slack = work[2], work[3], work[4], work[5]
+    kappa, N0 = droppers.kappa, droppers.force
+    n_drop = slack.size
+    f = 0.0
+    m = 0
+    for iteration in range(MAX_ACTIVE_SET_ITERATIONS):
+        f, m = _step_system(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, droppers, G, work)
+        gap = gap_known - c_cc * f
+        for i in range(m):
+            gap -= g_dc[idx[i]] * lam[i]
+        changed = False
+        for q in range(n_drop):
+            dl = dl_known[q] + g_dc[q] * f
+            for i in range(m):
+                dl += G[q, idx[i]] * lam[i]
+            elastic[q] = N0[q] + kappa[q] * dl - rate_term[q]  # spring plus damping share
+            new_slack[q] = elastic[q] < 0.0
+            changed = changed or new_slack[q] != slack[q]
+        new_contact = gap > 0.0
+        if new_contact == contact and not changed:
+            return contact, f, m, True
+        if iteration < FULL_SWITCH_ITERATIONS:  # as switch_states
+            contact = new_contact
+            for q in range(n_drop):
+                slack[q] = new_slack[q]
+        else:
+            worst = -1
+            violation = 0.0
+            for q in range(n_drop):
+                if new_slack[q] != slack[q] and (worst < 0 or abs(elastic[q]) > violation):
+                    worst = q
+                    violation = abs(elastic[q])
+            if (abs(kh * gap) if new_contact != contact else 0.0) >= violation:
+                contact = new_contact
+            else:
+                slack[worst] = not slack[worst]
+    return contact, f, m, False

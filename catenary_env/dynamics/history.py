@@ -1,97 +1,123 @@
-"""What a passage records at every step, for every backend (docs/model.md, 'Statistics and feasibility').
+"""What a passage records at every step, for every loop (docs/model.md, 'Statistics and feasibility').
 
-The numpy loops record through :meth:`PassageHistory.record`; the compiled loops write the same arrays
-in their state, which :meth:`PassageHistory.from_arrays` takes over. Either way the passage ends in one
+Every loop, numpy or compiled, of either model, writes the same :class:`PassageHistory` arrays: the numpy
+loops and the oracle through :func:`record`, the compiled loops through :func:`record_in_place` (the same
+rules in scalar loops). :func:`trajectory` ends the passage in one
 :class:`~catenary_env.dynamics.newmark.Trajectory`.
 """
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
+from .compilable import compilable
 from .newmark import Trajectory
 
+SLACK_STEPS, UNRESOLVED_STEPS = range(2)
+"""Slots of :attr:`PassageHistory.counts`."""
 
-class PassageHistory:
-    """The time histories and extremes of a passage of ``n_steps`` steps (see :class:`Trajectory`).
 
-    Parameters
+class PassageHistory(NamedTuple):
+    """The time histories and extremes of a passage (see :class:`Trajectory`), written in place.
+
+    Attributes
     ----------
-    n_steps : int
-    n_supports : int
-    static_dropper_force : ndarray (D,)
-        N; the droppers' extremes start from it.
-    force0, head_height0 : float
-        The contact force (N) and head height (m) at the start.
+    force, head_height, wire_uplift : ndarray (steps,)
+        Contact force (N), head height and contact-wire uplift at the pantograph (m).
+    support_uplift : ndarray (steps, supports)
+        m.
+    dropper_min, dropper_max : ndarray (D,)
+        The droppers' extreme forces, N (a slack dropper's counts as zero).
+    counts : ndarray (2,) of int
+        Steps with a slack dropper, and steps whose active set did not settle (slots
+        :data:`SLACK_STEPS`, :data:`UNRESOLVED_STEPS`).
     """
 
-    def __init__(
-        self,
-        n_steps: int,
-        n_supports: int,
-        static_dropper_force: np.ndarray,
-        force0: float,
-        head_height0: float,
-    ) -> None:
-        self.force = np.zeros(n_steps)
-        self.head_height = np.zeros(n_steps)
-        self.wire_uplift = np.zeros(n_steps)
-        self.support_uplift = np.zeros((n_steps, n_supports))
-        self.dropper_min = np.array(static_dropper_force, dtype=float)
-        self.dropper_max = np.array(static_dropper_force, dtype=float)
-        self.slack_steps = 0
-        self.unresolved_steps = 0
-        self.force[0] = force0
-        self.head_height[0] = head_height0
+    force: np.ndarray
+    head_height: np.ndarray
+    wire_uplift: np.ndarray
+    support_uplift: np.ndarray
+    dropper_min: np.ndarray
+    dropper_max: np.ndarray
+    counts: np.ndarray
 
-    @classmethod
-    def from_arrays(cls, arrays: object, slack_steps: int, unresolved_steps: int) -> PassageHistory:
-        """The history a compiled loop wrote into its state ``arrays`` (same field names)."""
-        history = cls.__new__(cls)
-        for name in ("force", "head_height", "wire_uplift", "support_uplift"):
-            setattr(history, name, getattr(arrays, name))
-        history.dropper_min = arrays.dropper_min
-        history.dropper_max = arrays.dropper_max
-        history.slack_steps = int(slack_steps)
-        history.unresolved_steps = int(unresolved_steps)
-        return history
 
-    def record(
-        self,
-        k: int,
-        force: float,
-        head_height: float,
-        wire_uplift: float,
-        support_uplift: np.ndarray,
-        dropper_forces: np.ndarray,
-        slack: np.ndarray,
-        any_slack: bool,
-        resolved: bool,
-    ) -> None:
-        """Step ``k``'s contact force (N), head height and wire uplift (m), support uplifts (m), the
-        droppers' forces (N; a slack dropper's counts as zero), whether the step solved for a slack
-        dropper, and whether its active set settled."""
-        self.force[k] = force
-        self.head_height[k] = head_height
-        self.wire_uplift[k] = wire_uplift
-        self.support_uplift[k] = support_uplift
-        transmitted = np.where(slack, 0.0, dropper_forces)
-        np.minimum(self.dropper_min, transmitted, out=self.dropper_min)
-        np.maximum(self.dropper_max, transmitted, out=self.dropper_max)
-        self.slack_steps += bool(any_slack)
-        self.unresolved_steps += not resolved
+def start_history(
+    n_steps: int, n_supports: int, static_dropper_force: np.ndarray, force0: float, head_height0: float
+) -> PassageHistory:
+    """An empty history with step 0's contact force (N) and head height (m); the droppers' extremes start
+    from their static forces (N)."""
+    history = PassageHistory(
+        force=np.zeros(n_steps),
+        head_height=np.zeros(n_steps),
+        wire_uplift=np.zeros(n_steps),
+        support_uplift=np.zeros((n_steps, n_supports)),
+        dropper_min=np.array(static_dropper_force, dtype=float),
+        dropper_max=np.array(static_dropper_force, dtype=float),
+        counts=np.zeros(2, dtype=np.int64),
+    )
+    history.force[0] = force0
+    history.head_height[0] = head_height0
+    return history
 
-    def trajectory(self, time: np.ndarray, position: np.ndarray, support_x: np.ndarray) -> Trajectory:
-        return Trajectory(
-            time=time,
-            position=position,
-            contact_force=self.force,
-            head_height=self.head_height,
-            wire_uplift=self.wire_uplift,
-            support_x=support_x.copy(),
-            support_uplift=self.support_uplift,
-            dropper_force_min=self.dropper_min,
-            dropper_force_max=self.dropper_max,
-            slack_steps=self.slack_steps,
-            unresolved_steps=self.unresolved_steps,
-        )
+
+def record(
+    history: PassageHistory,
+    k: int,
+    force: float,
+    head_height: float,
+    wire_uplift: float,
+    support_uplift: np.ndarray,
+    dropper_forces: np.ndarray,
+    slack: np.ndarray,
+    any_slack: bool,
+    resolved: bool,
+) -> None:
+    """Step ``k``'s contact force (N), head height and wire uplift (m), support uplifts (m), the droppers'
+    forces (N; a slack dropper's counts as zero), whether the step solved for a slack dropper, and whether
+    its active set settled."""
+    history.force[k] = force
+    history.head_height[k] = head_height
+    history.wire_uplift[k] = wire_uplift
+    history.support_uplift[k] = support_uplift
+    transmitted = np.where(slack, 0.0, dropper_forces)
+    np.minimum(history.dropper_min, transmitted, out=history.dropper_min)
+    np.maximum(history.dropper_max, transmitted, out=history.dropper_max)
+    history.counts[SLACK_STEPS] += bool(any_slack)
+    history.counts[UNRESOLVED_STEPS] += not resolved
+
+
+@compilable()
+def record_in_place(history, k, force, head_height, wire_uplift, dropper_forces, slack, any_slack, resolved):  # noqa: ANN001, ANN201
+    """:func:`record` in scalar loops, for the compiled loops, which write the support uplifts themselves."""
+    history.force[k] = force
+    history.head_height[k] = head_height
+    history.wire_uplift[k] = wire_uplift
+    for q in range(slack.size):
+        transmitted = 0.0 if slack[q] else dropper_forces[q]
+        history.dropper_min[q] = min(history.dropper_min[q], transmitted)
+        history.dropper_max[q] = max(history.dropper_max[q], transmitted)
+    history.counts[SLACK_STEPS] += 1 if any_slack else 0
+    history.counts[UNRESOLVED_STEPS] += 0 if resolved else 1
+
+
+def trajectory(
+    history: PassageHistory, time: np.ndarray, position: np.ndarray, support_x: np.ndarray
+) -> Trajectory:
+    """The passage's :class:`Trajectory` at ``time`` (s) and pantograph ``position`` (m); supports at
+    ``support_x`` (m)."""
+    return Trajectory(
+        time=time,
+        position=position,
+        contact_force=history.force,
+        head_height=history.head_height,
+        wire_uplift=history.wire_uplift,
+        support_x=support_x.copy(),
+        support_uplift=history.support_uplift,
+        dropper_force_min=history.dropper_min,
+        dropper_force_max=history.dropper_max,
+        slack_steps=int(history.counts[SLACK_STEPS]),
+        unresolved_steps=int(history.counts[UNRESOLVED_STEPS]),
+    )

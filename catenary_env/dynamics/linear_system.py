@@ -14,7 +14,7 @@ ends of the section and, with ``axial_restraint = "every-support"``, at every me
 other choices add the droppers' geometric stiffness, Rayleigh damping over the wires only, or slack
 droppers that keep their damping; the last two give a system whose damping is not C = αM + βK with slack
 droppers dropping their whole force (:attr:`LinearSystem.rayleigh` is False), which only the
-straightforward loop (:mod:`~catenary_env.dynamics.oracle`) integrates.
+straightforward loop (:mod:`~catenary_env.dynamics.exact.oracle`) integrates.
 """
 
 from __future__ import annotations
@@ -133,7 +133,7 @@ class LinearSystem:
     @property
     def rayleigh(self) -> bool:
         """True when C = alpha M + beta K and a slack dropper drops its whole force: what the fast loops
-        (:mod:`~catenary_env.dynamics.passage`, the span-mode model) integrate."""
+        (:mod:`~catenary_env.dynamics.exact`, the span-mode model) integrate."""
         return self.damping_matrix is None and not self.slack_dropper_damping
 
 

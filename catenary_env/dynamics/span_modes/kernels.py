@@ -1,138 +1,38 @@
-"""The span-mode passage's time loop, compiled by numba (optional; the numpy loop in
-:mod:`reduced_passage` is the reference and follows the same steps).
+"""The span-mode passage's time loop, compiled by numba (optional; the numpy loop, :mod:`.loop`, follows
+the same steps).
 
 Each step:
 
 1. The interface part of K̂⁻¹ M e: x_b = S⁻¹ (Y e_b + Σ_s M_cq w e_q), w = 1 - c_m / D.
 2. The droppers' elongations and the contact point's displacement from x_b and e, without the
    modes' full solution: B x = (B_q D⁻¹) e_q + (B_q D⁻¹ M_qc)(e_c - c_m x_c) + B_c x_c.
-3. The contact force and the slack droppers (active set, :func:`_kernels._settle`).
+3. The contact force and the slack droppers (:func:`~catenary_env.dynamics.active_set.settle_in_place`).
 4. Their response on the interface, Δx_b = S⁻¹ (F_b - c_m Σ M_cq D⁻¹ F_q), precomputed per
    contact-wire element and per dropper; then every span's modes in one pass,
    x_q = D⁻¹ (e_q + F_q + M_qc (e_c - c_m x_c)), fused with the Newmark update.
 
 S and Y depend on the configuration (the span the pantograph is in); S is a banded Cholesky factor.
+
+It reads :class:`~catenary_env.dynamics.span_modes.preparation.SpanModeArrays`, the contact point's
+:class:`~catenary_env.dynamics.contact_point.ContactPointArrays` and updates a
+:class:`~catenary_env.dynamics.span_modes.passage.SpanModeState`; the active set, the Newmark update, the
+pantograph's part of the step and the history are the shared compilable functions
+(:mod:`~catenary_env.dynamics.compilable`).
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import numpy as np
 from numba import njit
 
-from ._kernels import (
-    A0,
-    A1,
-    A2,
-    A3,
-    A4,
-    A5,
-    CONTACT,
-    CONTACT_STIFFNESS,
-    G1,
-    G2,
-    G3,
-    MASS_FACTOR,
-    RAYLEIGH_BETA,
-    SLACK_STEPS,
-    UNRESOLVED,
-    _advance,
-    _settle,
-    pantograph_known,
-    settle_workspace,
-)
-
-CONFIGURATION = 1
-"""Slot of ReducedState.flags holding the configuration (the others as the exact loop's)."""
+from ..active_set import settle_in_place, settle_workspace
+from ..contact_point import advance_pantograph_in_place, known_response_in_place
+from ..history import record_in_place
+from ..newmark import advance
 
 FAST = {"contract", "reassoc"}
 """Floating-point licences: fused multiply-adds, and sums in any order so that the dot products
 vectorise (the results change by rounding only)."""
-
-
-class ReducedArrays(NamedTuple):
-    """What the loop reads: the fields of :func:`reduced_passage.prepare_reduced_passage`'s arrays
-    plus the passage's. Shapes: S spans, T types, C = S configurations, D droppers, n_b interface
-    DOFs, w the Schur complement's band width, m, n_c, n_i the padded modes, coupled interface and
-    internal DOFs of a span type, E contact-wire elements, K droppers per span.
-    """
-
-    span_type: np.ndarray  # (S,)
-    modal_offset: np.ndarray  # (S + 1,)
-    coupled: np.ndarray  # (S, n_c) interface positions
-    n_coupled: np.ndarray  # (T,)
-    n_modes: np.ndarray  # (T,)
-    kept: np.ndarray  # (C, S) modes each span keeps in configuration c
-    coupling: np.ndarray  # (T, n_c, m) M_cq
-    inverse_diagonal: np.ndarray  # (T, m) 1 / D
-    weight: np.ndarray  # (T, m) 1 - c_m / D
-    weighted_coupling: np.ndarray  # (T, n_c, m) M_cq (1 - c_m / D)
-    shapes: np.ndarray  # (T, n_i, m) Φ
-    constraint: np.ndarray  # (T, n_i, n_c) Ψ
-    shape_coupling: np.ndarray  # (T, n_i, n_c) Φ D⁻¹ M_qc over all the type's modes
-    schur_band: np.ndarray  # (C, w + 1, n_b) U in LAPACK band storage (the numpy loop's)
-    schur_columns: np.ndarray  # (C, n_b, w) the Cholesky factor U of S by columns (_band_solve)
-    schur_rows: np.ndarray  # (C, n_b, w) U by rows
-    schur_inverse_diagonal: np.ndarray  # (C, n_b)
-    interface_rhs_rows: np.ndarray  # (C, n_b, 2 w + 1) Y[r, r + k] at [r, w + k]
-    dropper_span: np.ndarray  # (D,) in order of span
-    dropper_start: np.ndarray  # (S + 1,) span s's droppers are dropper_start[s] .. dropper_start[s + 1] - 1
-    dropper_q: np.ndarray  # (D, m) B_q D⁻¹
-    dropper_q_plain: np.ndarray  # (D, m) B_q
-    dropper_c: np.ndarray  # (D, n_c) B_c
-    dropper_h: np.ndarray  # (C, D, n_c) B_q D⁻¹ M_qc over the kept modes
-    dropper_interface: np.ndarray  # (C, D, n_b) x_b of a unit dropper force
-    dropper_flexibility: np.ndarray  # (C, D, D) G with the residual
-    dropper_modal_flexibility: np.ndarray  # (C, D, D) G of the kept modes
-    dropper_rate: np.ndarray  # (D,)
-    dropper_force: np.ndarray  # (D,)
-    dropper_kappa: np.ndarray  # (D,)
-    element_span: np.ndarray  # (E,)
-    element_local: np.ndarray  # (E, 4) internal index, or -1 - position in the span's coupled list
-    element_compliance: np.ndarray  # (E, 4, 4) residual
-    element_droppers: np.ndarray  # (E, K) the span's droppers, -1 pads
-    element_dropper_residual: np.ndarray  # (E, 4, K)
-    element_modal_compliance: np.ndarray  # (E, 4, 4) rows_q D⁻¹ rows_qᵀ
-    element_dropper_modal: np.ndarray  # (E, 4, K) rows_q D⁻¹ B_qᵀ for the span's droppers
-    element_interface: np.ndarray  # (C, n_c, n_b) S⁻¹ at span c's coupled interface DOFs
-    dropper_element_interface: np.ndarray  # (C, n_c, D) (B_c - c_m H) S⁻¹ there
-    support: np.ndarray  # (supports,) interface position of each contact-wire support
-    coefficients: np.ndarray  # (16,) e1..e3, g1..g3, a0..a5, k_h, β, c_m, 1 / c_k
-    config: np.ndarray  # (steps,) the pantograph's span (its contact-wire element's)
-    element: np.ndarray  # (steps,)
-    shape: np.ndarray  # (steps, 4)
-    wire_z: np.ndarray  # (steps,)
-    pantograph_inverse: np.ndarray
-    pantograph_mass: np.ndarray
-    pantograph_damping: np.ndarray
-    y_star: np.ndarray
-    load_p: np.ndarray
-
-
-class ReducedState(NamedTuple):
-    """State and histories. u, v, a, e, y (n_r,): the next u_known is K̂⁻¹ M e + y; Bu, Bv, Ba
-    (D,): the droppers' elongations of u, v, a; flags: contact, configuration, slack steps, unresolved."""
-
-    u: np.ndarray
-    v: np.ndarray
-    a: np.ndarray
-    e: np.ndarray
-    y: np.ndarray
-    Bu: np.ndarray
-    Bv: np.ndarray
-    Ba: np.ndarray
-    y_p: np.ndarray
-    yd_p: np.ndarray
-    ydd_p: np.ndarray
-    slack: np.ndarray
-    flags: np.ndarray
-    force: np.ndarray
-    head_height: np.ndarray
-    wire_uplift: np.ndarray
-    support_uplift: np.ndarray
-    dropper_min: np.ndarray
-    dropper_max: np.ndarray
 
 
 @njit(cache=True, fastmath=FAST)
@@ -153,7 +53,7 @@ def _axpy(a, alpha, out, m):  # pragma: no cover - compiled
 
 @njit(cache=True, fastmath=FAST)
 def _band_solve(factor, b, x):  # pragma: no cover - compiled
-    """x = (Uᵀ U)⁻¹ b for the banded upper factor U in :func:`reduced_passage.band_rows` form: row j of
+    """x = (Uᵀ U)⁻¹ b for the banded upper factor U in :func:`.preparation.band_rows` form: row j of
     ``factor[0]`` holds U[j - w .. j - 1, j], row i of ``factor[1]`` holds U[i, i + 1 .. i + w], and
     ``factor[2]`` the reciprocal diagonal. Both sweeps by columns (each unknown, once found, is
     subtracted from the w that follow), so that the inner loops carry no dependency."""
@@ -204,7 +104,7 @@ def _element_responses(d, c, e, rows_c, p_b, comp, g_modal, g_full, mq, forces):
     residual, and mq = rows_q D⁻¹ M_qc (4, n_c). The element lies in the pantograph's span c, which
     keeps all its modes: its interface forces F = rows_c - c_m mq act at span c's coupled DOFs,
     whose S⁻¹ columns and droppers' responses the configuration holds."""
-    c_m = d.coefficients[MASS_FACTOR]
+    c_m = d.coefficients.mass_factor
     s = d.element_span[e]
     t = d.span_type[s]
     nc = d.n_coupled[t]
@@ -261,7 +161,7 @@ def _configure(d, st, c):  # pragma: no cover - compiled
     _dropper_elongations(d, c, st.u, st.Bu)
     _dropper_elongations(d, c, st.v, st.Bv)
     _dropper_elongations(d, c, st.a, st.Ba)
-    st.flags[CONFIGURATION] = c
+    st.configuration[0] = c
 
 
 @njit(cache=True, fastmath=FAST)
@@ -300,17 +200,62 @@ def _rows_axpy(rows, g, count, out, m):  # pragma: no cover - compiled
 
 
 @njit(cache=True, fastmath=FAST)
-def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C901
-    """Steps ``first`` to ``stop - 1`` of the passage, updating ``st`` in place."""
+def _contact_point(  # pragma: no cover - compiled
+    d, point, ps, k, c, el, rows_q, rows_c, m_qc, comp, g_full, g_modal, e_vec, y, x_b, g_c, h_q, g_dc, gm_dc,
+    rhs_p, y_known,
+):  # fmt: skip
+    """The contact point at step k, on element ``el`` (its rows and responses from :func:`_element_rows` and
+    :func:`_element_responses`): the gap without the step's forces (m) and its compliance (m/N), returned;
+    fills h_q = h rows_q, its couplings to the droppers, with the residual (g_dc) and of the kept modes
+    (gm_dc), and the pantograph's known response y_known."""
+    h = point.shape[k]
+    s_el = d.element_span[el]
+    t_el = d.span_type[s_el]
+    n_q = d.modal_offset[d.span_type.size]
+    # The wire under it: h rows_q (D⁻¹ (e_q + M_qc g_c) + y_q) + h rows_c u_c.
+    off = d.modal_offset[s_el]
+    m = d.kept[c, s_el]
+    inv_d = d.inverse_diagonal[t_el]
+    r0, r1, r2, r3 = rows_q[0], rows_q[1], rows_q[2], rows_q[3]
+    wire = 0.0
+    for i in range(m):
+        hq = h[0] * r0[i] + h[1] * r1[i] + h[2] * r2[i] + h[3] * r3[i]
+        h_q[i] = hq
+        wire += hq * (inv_d[i] * e_vec[off + i] + y[off + i])
+    for j in range(d.n_coupled[t_el]):
+        cj = d.coupled[s_el, j]
+        hm = h[0] * m_qc[0, j] + h[1] * m_qc[1, j] + h[2] * m_qc[2, j] + h[3] * m_qc[3, j]
+        hc = h[0] * rows_c[0, j] + h[1] * rows_c[1, j] + h[2] * rows_c[2, j] + h[3] * rows_c[3, j]
+        wire += hm * g_c[s_el, j] + hc * (x_b[cj] + y[n_q + cj])
+    known_response_in_place(point, d.coefficients, ps, rhs_p, y_known)
+    head = y_known.size - 1
+    gap_known = y_known[head] - point.wire_z[k] - wire
+    c_cc = point.y_star[head]
+    for r in range(4):
+        for cc in range(4):
+            c_cc += h[r] * comp[r, cc] * h[cc]
+    for q in range(g_dc.size):
+        g_dc[q] = g_full[0, q] * h[0] + g_full[1, q] * h[1] + g_full[2, q] * h[2] + g_full[3, q] * h[3]
+        gm_dc[q] = g_modal[0, q] * h[0] + g_modal[1, q] * h[1] + g_modal[2, q] * h[2] + g_modal[3, q] * h[3]
+    return gap_known, c_cc
+
+
+@njit(cache=True, fastmath=FAST)
+def run_steps(d, points, st, first, stop):  # pragma: no cover - compiled  # noqa: C901
+    """Steps ``first`` to ``stop - 1`` of the passage, updating the SpanModeState ``st`` in place.
+
+    ``points`` holds the contact points' arrays (one for now)."""
+    point = points[0]
+    ps = st.pantograph
     cf = d.coefficients
-    g1, g2, g3 = cf[G1], cf[G2], cf[G3]
-    a0, a1, a2, a3, a4, a5 = cf[A0], cf[A1], cf[A2], cf[A3], cf[A4], cf[A5]
-    kh, beta, c_m = cf[CONTACT_STIFFNESS], cf[RAYLEIGH_BETA], cf[MASS_FACTOR]
+    g1, g2, g3 = cf.g1, cf.g2, cf.g3
+    a0, a1, a2, a3, a4, a5 = cf.a0, cf.a1, cf.a2, cf.a3, cf.a4, cf.a5
+    kh, beta, c_m = cf.contact_stiffness, cf.rayleigh_beta, cf.mass_factor
     n_spans = d.span_type.size
     n_b = d.schur_inverse_diagonal.shape[1]
     n_q = d.modal_offset[n_spans]
-    n_drop = d.dropper_force.size
-    head = d.y_star.size - 1
+    n_drop = d.droppers.force.size
+    head = point.y_star.size - 1
     n_p = head + 1
     m_max = d.coupling.shape[2]
     nc_max = d.coupling.shape[1]
@@ -340,20 +285,20 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
     rhs_p = np.zeros(n_p)
     fq = np.zeros(m_max)  # a span's modes' right-hand side
     h_q = np.zeros(m_max)  # h rows_q: the contact point's row over its span's modes
-    contact = st.flags[CONTACT] != 0
+    contact = ps.contact[0] != 0
     current = -1
 
     for k in range(first, stop):
-        c = d.config[k]
-        if c != st.flags[CONFIGURATION]:
+        el = point.element[k]
+        c = d.element_span[el]  # the configuration: the pantograph's span
+        if c != st.configuration[0]:
             _configure(d, st, c)
             current = -1
-        el = d.element[k]
         if el != current:
             _element_rows(d, el, rows_q, rows_c)
             _element_responses(d, c, el, rows_c, p_b, comp, g_modal, g_full, m_qc, forces)
             current = el
-        h = d.shape[k]
+        h = point.shape[k]
         s_el = d.element_span[el]
         t_el = d.span_type[s_el]
         flex = d.dropper_flexibility[c]
@@ -386,35 +331,13 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
             nc = d.n_coupled[td]
             acc = dl_known[q] + _dot(d.dropper_h[c, q], g_c[sd], nc) + _dot(d.dropper_c[q], x_c[sd], nc)
             dl_known[q] = acc + g1 * st.Bu[q] + g2 * st.Bv[q] + g3 * st.Ba[q]
-            rate_term[q] = beta * d.dropper_rate[q] * (a1 * st.Bu[q] + a4 * st.Bv[q] + a5 * st.Ba[q])
-        # The contact point: h rows_q (D⁻¹ (e_q + M_qc g_c) + y_q) + h rows_c u_c.
-        off = d.modal_offset[s_el]
-        m = d.kept[c, s_el]
-        inv_d = d.inverse_diagonal[t_el]
-        r0, r1, r2, r3 = rows_q[0], rows_q[1], rows_q[2], rows_q[3]
-        wire = 0.0
-        for i in range(m):
-            hq = h[0] * r0[i] + h[1] * r1[i] + h[2] * r2[i] + h[3] * r3[i]
-            h_q[i] = hq
-            wire += hq * (inv_d[i] * e_vec[off + i] + y[off + i])
-        for j in range(d.n_coupled[t_el]):
-            cj = d.coupled[s_el, j]
-            hm = h[0] * m_qc[0, j] + h[1] * m_qc[1, j] + h[2] * m_qc[2, j] + h[3] * m_qc[3, j]
-            hc = h[0] * rows_c[0, j] + h[1] * rows_c[1, j] + h[2] * rows_c[2, j] + h[3] * rows_c[3, j]
-            wire += hm * g_c[s_el, j] + hc * (x_b[cj] + y[n_q + cj])
-        pantograph_known(d, st.y_p, st.yd_p, st.ydd_p, rhs_p, y_known)
-        gap_known = y_known[head] - d.wire_z[k] - wire
-        c_cc = d.y_star[head]
-        for r in range(4):
-            for cc in range(4):
-                c_cc += h[r] * comp[r, cc] * h[cc]
-        for q in range(n_drop):
-            g_dc[q] = g_full[0, q] * h[0] + g_full[1, q] * h[1] + g_full[2, q] * h[2] + g_full[3, q] * h[3]
-            gm_dc[q] = (
-                g_modal[0, q] * h[0] + g_modal[1, q] * h[1] + g_modal[2, q] * h[2] + g_modal[3, q] * h[3]
-            )
+            rate_term[q] = beta * d.droppers.rate[q] * (a1 * st.Bu[q] + a4 * st.Bv[q] + a5 * st.Ba[q])
+        gap_known, c_cc = _contact_point(
+            d, point, ps, k, c, el, rows_q, rows_c, m_qc, comp, g_full, g_modal, e_vec, y, x_b, g_c,
+            h_q, g_dc, gm_dc, rhs_p, y_known,
+        )  # fmt: skip
         # 3. Contact force and slack droppers.
-        contact, f, n_slack, resolved = _settle(
+        contact, f, n_slack, resolved = settle_in_place(
             contact,
             st.slack,
             gap_known,
@@ -423,12 +346,10 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
             dl_known,
             rate_term,
             kh,
-            d.dropper_kappa,
-            d.dropper_force,
+            d.droppers,
             flex,
             work,
         )
-        st.flags[UNRESOLVED] += 0 if resolved else 1
         # 4. Their interface response, then every span's modes with the Newmark update.
         for i in range(n_b):
             x_b[i] += f * (p_b[0, i] * h[0] + p_b[1, i] * h[1] + p_b[2, i] * h[2] + p_b[3, i] * h[3])
@@ -455,8 +376,8 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
             inv_d = d.inverse_diagonal[t]
             for i in range(m):
                 fq[i] *= inv_d[i]
-            _advance(u[off:end], v[off:end], acc_s[off:end], e_s, y[off:end], fq, cf)
-        _advance(u[n_q:], v[n_q:], acc_s[n_q:], e_vec[n_q:], y[n_q:], x_b, cf)
+            advance(u[off:end], v[off:end], acc_s[off:end], e_s, y[off:end], fq, cf)
+        advance(u[n_q:], v[n_q:], acc_s[n_q:], e_vec[n_q:], y[n_q:], x_b, cf)
         mflex = d.dropper_modal_flexibility[c]
         for q in range(n_drop):
             bu = dl_known[q] + gm_dc[q] * f
@@ -467,26 +388,13 @@ def run_reduced(d, st, first, stop):  # pragma: no cover - compiled  # noqa: C90
             st.Bv[q] = a1 * du - a4 * st.Bv[q] - a5 * st.Ba[q]
             st.Ba[q] = ba
             st.Bu[q] = bu
-        for i in range(n_p):
-            du = y_known[i] - f * d.y_star[i] - st.y_p[i]
-            acc_new = a0 * du - a2 * st.yd_p[i] - a3 * st.ydd_p[i]
-            st.yd_p[i] = a1 * du - a4 * st.yd_p[i] - a5 * st.ydd_p[i]
-            st.ydd_p[i] = acc_new
-            st.y_p[i] += du
-        # Histories.
-        st.force[k] = f
-        st.head_height[k] = st.y_p[head]
+        advance_pantograph_in_place(point, cf, ps, y_known, f)
         off = d.modal_offset[s_el]
         upl = _dot(h_q, u[off:], d.kept[c, s_el])
         for j in range(d.n_coupled[t_el]):
             hc = h[0] * rows_c[0, j] + h[1] * rows_c[1, j] + h[2] * rows_c[2, j] + h[3] * rows_c[3, j]
             upl += hc * u[n_q + d.coupled[s_el, j]]
-        st.wire_uplift[k] = upl
+        record_in_place(st.history, k, f, ps.y[head], upl, elastic, st.slack, n_slack > 0, resolved)
         for i in range(d.support.size):
-            st.support_uplift[k, i] = u[n_q + d.support[i]]
-        for q in range(n_drop):
-            force = 0.0 if st.slack[q] else elastic[q]
-            st.dropper_min[q] = min(st.dropper_min[q], force)
-            st.dropper_max[q] = max(st.dropper_max[q], force)
-        st.flags[SLACK_STEPS] += 1 if n_slack else 0
-    st.flags[CONTACT] = 1 if contact else 0
+            st.history.support_uplift[k, i] = u[n_q + d.support[i]]
+    ps.contact[0] = 1 if contact else 0

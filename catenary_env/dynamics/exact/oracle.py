@@ -9,52 +9,49 @@ pre-computed responses, no factorisation reused between steps. Slow by design; u
 sections only.
 
 It takes the system's damping matrix as it is, so it also integrates the modelling choices the fast
-loops do not (:attr:`~catenary_env.dynamics.linear_system.LinearSystem.rayleigh`): Rayleigh damping over
+loops do not (:attr:`~catenary_env.dynamics.linear_system.LinearSystem.rayleigh`); it is the exact model's
+``"oracle"`` backend (:mod:`~catenary_env.dynamics.exact.passage`): Rayleigh damping over
 the wires only, and slack droppers that keep their damping (only their spring force is removed, and
 slackness is judged on it).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..model.definition import PantographDefinition
-from .active_set import MAX_ACTIVE_SET_ITERATIONS, switch_states
-from .history import PassageHistory
-from .linear_system import LinearSystem
-from .newmark import NewmarkConstants, Trajectory, passage_positions
-from .pantograph import pantograph_matrices, static_contact
+from ..active_set import MAX_ACTIVE_SET_ITERATIONS, switch_states
+from ..contact_point import StartedPoint
+from ..history import PassageHistory, record
+from ..pantograph import pantograph_matrices
+from ..protocol import ContactPoint
+from .preparation import PreparedExact
 
 
-def simulate_passage_reference(
-    system: LinearSystem,
-    pantograph: PantographDefinition,
-    uplift_force: float,
-    speed: float,
-    time_step: float,
-    n_steps: int | None = None,
-) -> Trajectory:
-    """Same contract as :func:`.passage.simulate_passage`; ``n_steps`` may cut it short."""
-    lay = system.static.layout
-    cat = lay.catenary
-    nm = NewmarkConstants.for_step(time_step)
+def run_steps(
+    prepared: PreparedExact,
+    point: ContactPoint,
+    started: StartedPoint,
+    history: PassageHistory,
+    progress: Callable[[float], None] | None,
+) -> None:
+    """The whole passage of the contact point ``started`` (from ``point``), into ``history``."""
+    system, nm = prepared.system, prepared.constants
+    cat = system.static.layout.catenary
     M, K = system.mass.tocsr(), system.stiffness.tocsr()
     C = system.damping
     B = system.dropper_elongation.tocsr()
     rate, N0, beta = system.dropper_rate, system.dropper_force, system.beta
     # The damping share a slack dropper drops with its spring: β k, or none where it keeps its damping.
     beta_slack = 0.0 if system.slack_dropper_damping else beta
-    pm = pantograph_matrices(pantograph)
+    pm = pantograph_matrices(point.pantograph)
     head = pm.head
     n, n_p = system.n_dofs, pm.mass.shape[0]
     kh = cat.contact_stiffness
-    time, position = passage_positions(lay.n_spans * lay.span_length, speed, time_step)
-    if n_steps is not None:
-        time, position = time[:n_steps], position[:n_steps]
-    element, shape, wire_z = system.contact_wire.locate(position)
-    wire_z = wire_z - cat.contact_wire_height
+    element, shape, wire_z = started.arrays.element, started.arrays.shape, started.arrays.wire_z
 
     # Effective matrices of the coupled system [u; y] without contact and with every dropper taut.
     Khat = K + nm.a1 * C + nm.a0 * M
@@ -63,19 +60,20 @@ def simulate_passage_reference(
     M_all = sp.block_diag([M, sp.csr_matrix(pm.mass)]).tocsr()
     C_all = sp.block_diag([C, sp.csr_matrix(pm.damping)]).tocsr()
 
-    y, f0 = static_contact(pm, uplift_force, kh, wire_z[0])
-    U = np.r_[np.zeros(n), y]
+    U = np.r_[np.zeros(n), started.state.y]
     V = np.zeros(n + n_p)
     N_row0 = np.zeros(n + n_p)
     N_row0[system.contact_wire.z_dofs[element[0]]] = shape[0]
-    A = np.r_[spla.spsolve(M.tocsc(), N_row0[:n] * f0), np.zeros(n_p)]
+    A = np.r_[spla.spsolve(M.tocsc(), N_row0[:n] * started.force0), np.zeros(n_p)]
 
-    steps = time.size
-    history = PassageHistory(steps, system.support_z.size, N0, f0, y[head])
-    contact, slack = f0 > 0.0, np.zeros(N0.size, dtype=bool)
+    steps = element.size
+    report_every = max(1, steps // 100)
+    contact, slack = started.force0 > 0.0, np.zeros(N0.size, dtype=bool)
     for k in range(1, steps):
+        if progress is not None and k % report_every == 0:
+            progress(k / steps)
         rhs = M_all @ (nm.a0 * U + nm.a2 * V + nm.a3 * A) + C_all @ (nm.a1 * U + nm.a4 * V + nm.a5 * A)
-        rhs[n] += uplift_force
+        rhs[n] += point.frame_force
         # Contact row: the wire's height at the pantograph is N·u, the head's is y_head.
         N_row = np.zeros(n + n_p)
         N_row[system.contact_wire.z_dofs[element[k]]] = shape[k]
@@ -111,7 +109,8 @@ def simulate_passage_reference(
             )
         V, A = nm.update(U, V, A, U_new)
         U = U_new
-        history.record(
+        record(
+            history,
             k,
             kh * gap if contact else 0.0,
             U[n + head],
@@ -122,4 +121,5 @@ def simulate_passage_reference(
             bool(np.any(slack)),
             resolved,
         )
-    return history.trajectory(time, position, lay.support_x)
+    if progress is not None:
+        progress(1.0)

@@ -35,7 +35,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order
 
-from .linear_system import LinearSystem
+from ..linear_system import LinearSystem
 
 SAME_SPAN_TOLERANCE = 1e-7
 """Largest relative difference of two spans' matrices for them to share their modes. Interior

@@ -1,7 +1,7 @@
 """The pantograph passage on the span-mode model (docs/performance.md, 'Model fidelities').
 
 The same Newmark scheme, superposition and active-set rules as the exact passage, in the
-coordinates of :mod:`span_modes`. The effective matrix K̂ = c_k K + c_m M of the reduced system is
+coordinates of :mod:`.reduction`. The effective matrix K̂ = c_k K + c_m M of the reduced system is
 diagonal in each span's modes, D = c_k ω² + c_m, and couples them only through the interface DOFs,
 so a solve eliminates the modes span by span and leaves a small banded system on the interface,
 its Schur complement S:
@@ -23,31 +23,76 @@ truncated modes. Their share of the one-step compliance, R = K̂_ii⁻¹ - Φ D�
 where the forces act, so that the contact and the slack droppers see the exact one-step compliance;
 the truncated modes carry no state.
 
-Both loops, numpy (:func:`_run_numpy`) and compiled (:mod:`_reduced_kernels`), read the same
-:class:`ReducedArrays` and follow the same steps (see :mod:`_reduced_kernels`).
+This module prepares what both loops, numpy (:mod:`.loop`) and compiled (:mod:`.kernels`), read of the
+design, :class:`SpanModeArrays`; they follow the same steps (see :mod:`.kernels`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import scipy.linalg as sla
-from numpy.lib.stride_tricks import sliding_window_view
 
-from ..model.definition import PantographDefinition
-from .active_set import settle
-from .history import PassageHistory
-from .newmark import NewmarkConstants, Trajectory
-from .passage import _Passage, _start_passage
-from .span_modes import ReducedSystem, band_storage, band_width, submatrix
+from ..active_set import Droppers
+from ..linear_system import LinearSystem
+from ..newmark import NewmarkConstants, StepCoefficients
+from ..protocol import DynamicsSettings
+from .reduction import ReducedSystem, band_storage, band_width, reduce_system, submatrix
+
+
+class SpanModeArrays(NamedTuple):
+    """What both loops read of the design. Shapes: S spans, T types, C = S configurations, D droppers, n_b
+    interface DOFs, w the Schur complement's band width, m, n_c, n_i the padded modes, coupled interface and
+    internal DOFs of a span type, E contact-wire elements, K droppers per span.
+    """
+
+    span_type: np.ndarray  # (S,)
+    modal_offset: np.ndarray  # (S + 1,)
+    coupled: np.ndarray  # (S, n_c) interface positions
+    n_coupled: np.ndarray  # (T,)
+    n_modes: np.ndarray  # (T,)
+    kept: np.ndarray  # (C, S) modes each span keeps in configuration c
+    coupling: np.ndarray  # (T, n_c, m) M_cq
+    inverse_diagonal: np.ndarray  # (T, m) 1 / D
+    weight: np.ndarray  # (T, m) 1 - c_m / D
+    weighted_coupling: np.ndarray  # (T, n_c, m) M_cq (1 - c_m / D)
+    shapes: np.ndarray  # (T, n_i, m) Φ
+    constraint: np.ndarray  # (T, n_i, n_c) Ψ
+    shape_coupling: np.ndarray  # (T, n_i, n_c) Φ D⁻¹ M_qc over all the type's modes
+    schur_band: np.ndarray  # (C, w + 1, n_b) U in LAPACK band storage (the numpy loop's)
+    schur_columns: np.ndarray  # (C, n_b, w) the Cholesky factor U of S by columns (_band_solve)
+    schur_rows: np.ndarray  # (C, n_b, w) U by rows
+    schur_inverse_diagonal: np.ndarray  # (C, n_b)
+    interface_rhs_rows: np.ndarray  # (C, n_b, 2 w + 1) Y[r, r + k] at [r, w + k]
+    dropper_span: np.ndarray  # (D,) in order of span
+    dropper_start: np.ndarray  # (S + 1,) span s's droppers are dropper_start[s] .. dropper_start[s + 1] - 1
+    dropper_q: np.ndarray  # (D, m) B_q D⁻¹
+    dropper_q_plain: np.ndarray  # (D, m) B_q
+    dropper_c: np.ndarray  # (D, n_c) B_c
+    dropper_h: np.ndarray  # (C, D, n_c) B_q D⁻¹ M_qc over the kept modes
+    dropper_interface: np.ndarray  # (C, D, n_b) x_b of a unit dropper force
+    dropper_flexibility: np.ndarray  # (C, D, D) G with the residual
+    dropper_modal_flexibility: np.ndarray  # (C, D, D) G of the kept modes
+    element_span: np.ndarray  # (E,)
+    element_local: np.ndarray  # (E, 4) internal index, or -1 - position in the span's coupled list
+    element_compliance: np.ndarray  # (E, 4, 4) residual
+    element_droppers: np.ndarray  # (E, K) the span's droppers, -1 pads
+    element_dropper_residual: np.ndarray  # (E, 4, K)
+    element_modal_compliance: np.ndarray  # (E, 4, 4) rows_q D⁻¹ rows_qᵀ
+    element_dropper_modal: np.ndarray  # (E, 4, K) rows_q D⁻¹ B_qᵀ for the span's droppers
+    element_interface: np.ndarray  # (C, n_c, n_b) S⁻¹ at span c's coupled interface DOFs
+    dropper_element_interface: np.ndarray  # (C, n_c, D) (B_c - c_m H) S⁻¹ there
+    support: np.ndarray  # (supports,) interface position of each contact-wire support
+    droppers: Droppers
+    coefficients: StepCoefficients
 
 
 def band_rows(ab: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """An upper band factor U (LAPACK storage, (w + 1, n)) as its columns above the diagonal (n, w),
     its rows right of the diagonal (n, w) and its reciprocal diagonal (n,): the compiled loop reads
-    each contiguously (see ``_reduced_kernels._band_solve``)."""
+    each contiguously (see ``.kernels._band_solve``)."""
     w = ab.shape[0] - 1
     n = ab.shape[1]
     columns = np.ascontiguousarray(ab[:w].T)  # columns[j, w - k] = U[j - k, j]
@@ -58,29 +103,40 @@ def band_rows(ab: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 @dataclass(frozen=True)
-class PreparedReducedPassage:
-    """The design's part of the reduced passage, computed once per design and time step.
+class PreparedSpanModes:
+    """The design's part of the span-mode model, computed once per design and time step.
 
     Attributes
     ----------
     reduced : ReducedSystem
     constants : NewmarkConstants
     near_spans : int
-    arrays : dict of str to ndarray
-        The loop's arrays (:class:`catenary_env._reduced_kernels.ReducedArrays` fields without the
-        per-passage ones).
+    arrays : SpanModeArrays
+        What both loops read of the design.
     """
 
     reduced: ReducedSystem
     constants: NewmarkConstants
     near_spans: int
-    arrays: dict
+    arrays: SpanModeArrays
 
 
-def prepare_reduced_passage(
-    reduced: ReducedSystem, time_step: float, near_spans: int
-) -> PreparedReducedPassage:
-    """The Schur complements, dropper responses and residual compliances of every configuration."""
+def prepare(system: LinearSystem, fidelity: DynamicsSettings) -> PreparedSpanModes:
+    """The span modes below the fidelity's cut-offs (:func:`.reduction.reduce_system`) and, for its time
+    step and near spans, the Schur complements, dropper responses and residual compliances of every
+    configuration."""
+    if not system.rayleigh:
+        raise ValueError(
+            "the span-mode model integrates C = alpha M + beta K with slack droppers dropping their whole "
+            "force only: use the exact model"
+        )
+    reduced = reduce_system(system, fidelity.near_cutoff, fidelity.far_cutoff)
+    return prepare_reduced(reduced, fidelity.time_step, fidelity.near_spans)
+
+
+def prepare_reduced(reduced: ReducedSystem, time_step: float, near_spans: int) -> PreparedSpanModes:
+    """:func:`prepare` of a reduced system, for a time step (s) and the spans on each side of the
+    pantograph's that keep the near cut-off."""
     system = reduced.system
     nm = NewmarkConstants.for_step(time_step)
     c_k = 1.0 + system.beta * nm.a1
@@ -91,16 +147,18 @@ def prepare_reduced_passage(
     residual = _Residuals(reduced, c_k, c_m, droppers["dropper_span"])
     configurations = _configurations(reduced, c_k, c_m, kept, modes, droppers, residual)
     elements = _element_arrays(reduced, droppers, residual)
-    arrays = modes | droppers | configurations | elements
-    arrays.update(
+    kh = system.static.layout.catenary.contact_stiffness
+    arrays = SpanModeArrays(
+        **modes,
+        **droppers,
+        **configurations,
+        **elements,
         kept=kept,
-        dropper_rate=system.dropper_rate.astype(float),
-        dropper_force=system.dropper_force.astype(float),
-        dropper_kappa=system.dropper_rate * c_k,
+        droppers=Droppers.for_step(system.dropper_rate, system.dropper_force, system.beta, nm.a1),
         support=residual.interface_position[system.support_z],
-        coefficients=_coefficients(reduced, nm, c_k, c_m),
+        coefficients=StepCoefficients.for_step(nm, system.alpha, system.beta, kh),
     )
-    return PreparedReducedPassage(reduced, nm, near_spans, arrays)
+    return PreparedSpanModes(reduced, nm, near_spans, arrays)
 
 
 def _mode_arrays(reduced: ReducedSystem, c_k: float, c_m: float) -> dict[str, np.ndarray]:
@@ -397,48 +455,7 @@ def _element_arrays(
     )
 
 
-def _coefficients(reduced: ReducedSystem, nm: NewmarkConstants, c_k: float, c_m: float) -> np.ndarray:
-    """e1..e3, g1..g3, a0..a5, k_h, β, c_m, 1 / c_k: the next u_known is K̂⁻¹ M e + y with
-    e = e1 u + e2 v + e3 a and y = g1 u + g2 v + g3 a. With Rayleigh damping K̂ = c_k K + c_m M, so
-    K̂⁻¹ (M x + K z) = K̂⁻¹ M (x - c_m z / c_k) + z / c_k: no product with K (y = z / c_k, the
-    convention of the exact loop's ``_kernels._advance``)."""
-    system = reduced.system
-    x_coef = np.array(
-        [nm.a0 + system.alpha * nm.a1, nm.a2 + system.alpha * nm.a4, nm.a3 + system.alpha * nm.a5]
-    )
-    g_coef = system.beta * np.array([nm.a1, nm.a4, nm.a5])
-    contact = system.static.layout.catenary.contact_stiffness
-    newmark = [nm.a0, nm.a1, nm.a2, nm.a3, nm.a4, nm.a5]
-    return np.concatenate(
-        [x_coef - (c_m / c_k) * g_coef, g_coef / c_k, newmark, [contact, system.beta, c_m, 1 / c_k]]
-    )
-
-
-class _Arrays:
-    """Attribute access to the loop's arrays (the numpy loop reads what the compiled one reads)."""
-
-    def __init__(self, fields: dict) -> None:
-        self.__dict__.update(fields)
-
-
-def _passage_arrays(prepared: PreparedReducedPassage, passage: _Passage) -> dict:
-    pm = passage.pantograph
-    element = passage.element.astype(np.int64)
-    return dict(
-        prepared.arrays,
-        config=prepared.arrays["element_span"][element],
-        element=element,
-        shape=np.ascontiguousarray(passage.shape, dtype=float),
-        wire_z=passage.wire_z.astype(float),
-        pantograph_inverse=passage.pantograph_inverse,
-        pantograph_mass=np.ascontiguousarray(pm.mass, dtype=float),
-        pantograph_damping=np.ascontiguousarray(pm.damping, dtype=float),
-        y_star=passage.y_star,
-        load_p=passage.load_p,
-    )
-
-
-def _initial_acceleration(reduced: ReducedSystem, kept: np.ndarray, load: np.ndarray) -> np.ndarray:
+def initial_acceleration(reduced: ReducedSystem, kept: np.ndarray, load: np.ndarray) -> np.ndarray:
     """a = M_r⁻¹ Tᵀ load over the kept modes, for the catenary at rest under the first contact force."""
     n_q = reduced.n_modal
     off = reduced.modal_offset
@@ -456,285 +473,3 @@ def _initial_acceleration(reduced: ReducedSystem, kept: np.ndarray, load: np.nda
         coupling = reduced.modes_of(s).mass_coupling[: kept[s]]
         x[off[s] : off[s] + kept[s]] = rhs[off[s] : off[s] + kept[s]] - coupling @ x_b[c]
     return x
-
-
-def simulate_reduced_passage(
-    prepared: PreparedReducedPassage,
-    pantograph: PantographDefinition,
-    uplift_force: float,
-    speed: float,
-    n_steps: int | None = None,
-    backend: str = "auto",
-    progress: Callable[[float], None] | None = None,
-) -> Trajectory:
-    """Pantograph passage over the whole section on the span-mode model (same rules as the exact one).
-
-    backend : {"auto", "numpy", "numba"}
-        ``"numba"`` compiles the loop (:mod:`catenary_env._reduced_kernels`); ``"numpy"`` is the
-        reference; ``"auto"`` takes numba when it is installed.
-    """
-    red = prepared.reduced
-    system = red.system
-    if backend == "auto":
-        backend = "numba" if _compiled_loop() is not None else "numpy"
-    if backend not in BACKENDS:
-        raise ValueError(f"backend = {backend!r}: one of auto, {', '.join(BACKENDS)}")
-    passage = _start_passage(system, pantograph, uplift_force, speed, prepared.constants, n_steps)
-    fields = _passage_arrays(prepared, passage)
-    n = red.n_dofs
-    n_steps = passage.time.size
-    head = passage.pantograph.head
-    N0 = system.dropper_force
-    c0 = int(fields["config"][0])
-    load = np.zeros(system.n_dofs)
-    np.add.at(load, system.contact_wire.z_dofs[passage.element[0]], passage.shape[0] * passage.force0)
-    a = _initial_acceleration(red, fields["kept"][c0], load)
-    cf = fields["coefficients"]
-    state = dict(
-        u=np.zeros(n),
-        v=np.zeros(n),
-        a=a,
-        e=cf[2] * a,
-        y=cf[5] * a,
-        Bu=np.zeros(N0.size),
-        Bv=np.zeros(N0.size),
-        Ba=np.zeros(N0.size),
-        y_p=passage.y0.copy(),
-        yd_p=np.zeros(head + 1),
-        ydd_p=np.zeros(head + 1),
-        slack=np.zeros(N0.size, dtype=np.bool_),
-        flags=np.array([passage.force0 > 0.0, -1, 0, 0], dtype=np.int64),
-        force=np.zeros(n_steps),
-        head_height=np.zeros(n_steps),
-        wire_uplift=np.zeros(n_steps),
-        support_uplift=np.zeros((n_steps, system.support_z.size)),
-        dropper_min=N0.copy(),
-        dropper_max=N0.copy(),
-    )
-    state["force"][0] = passage.force0
-    state["head_height"][0] = passage.y0[head]
-    BACKENDS[backend](fields, state, progress)
-    history = PassageHistory.from_arrays(_Arrays(state), state["flags"][2], state["flags"][3])
-    return history.trajectory(passage.time, passage.position, system.static.layout.support_x)
-
-
-def _compiled_loop():  # noqa: ANN202
-    """:mod:`catenary_env.dynamics._reduced_kernels`, or None where numba is not installed."""
-    try:
-        from . import _reduced_kernels
-    except ImportError:
-        return None
-    return _reduced_kernels
-
-
-def _run_compiled(fields: dict, state: dict, progress: Callable[[float], None] | None) -> None:
-    """The compiled loop (:mod:`catenary_env.dynamics._reduced_kernels`), in chunks for ``progress``."""
-    kernels = _compiled_loop()
-    if kernels is None:
-        raise ImportError("backend='numba' needs numba: pip install numba")
-    data = kernels.ReducedArrays(**fields)
-    st = kernels.ReducedState(**state)
-    n_steps = data.element.size
-    bounds = np.unique(np.linspace(1, n_steps, 101 if progress is not None else 2).round().astype(int))
-    for first, stop in zip(bounds[:-1], bounds[1:], strict=True):
-        kernels.run_reduced(data, st, int(first), int(stop))
-        if progress is not None:
-            progress(stop / n_steps)
-
-
-def _schur_solve(d: _Arrays, c: int, b: np.ndarray) -> np.ndarray:
-    return sla.cho_solve_banded((d.schur_band[c], False), b, check_finite=False)
-
-
-def _element_rows(d: _Arrays, e: int) -> tuple[np.ndarray, np.ndarray]:
-    t = d.span_type[d.element_span[e]]
-    rows_q = np.zeros((4, d.coupling.shape[2]))
-    rows_c = np.zeros((4, d.coupling.shape[1]))
-    for i in range(4):
-        local = d.element_local[e, i]
-        if local >= 0:
-            rows_q[i] = d.shapes[t, local]
-            rows_c[i] = d.constraint[t, local]
-        else:
-            rows_c[i, -1 - local] = 1.0
-    return rows_q, rows_c
-
-
-def _element_responses(d: _Arrays, c: int, e: int, rows_q: np.ndarray, rows_c: np.ndarray):
-    """As the compiled loop's: p_b (n_b, 4), compliance (4, 4), g_modal and g_full (D, 4)."""
-    c_m = d.coefficients[14]
-    s = d.element_span[e]
-    t = d.span_type[s]
-    m = d.kept[c, s]
-    nc = d.n_coupled[t]
-    idiag = d.inverse_diagonal[t, :m]
-    coupling = d.coupling[t, :nc, :m]  # M_cq
-    n_b = d.schur_inverse_diagonal.shape[1]
-    F_b = np.zeros((n_b, 4))
-    np.add.at(F_b, d.coupled[s, :nc], rows_c[:, :nc].T - c_m * coupling @ (idiag[:, None] * rows_q[:, :m].T))
-    p_b = _schur_solve(d, c, F_b)
-    p_c = p_b[d.coupled[s, :nc]]
-    rq = rows_q[:, :m] * idiag
-    comp = d.element_compliance[e] + rq @ rows_q[:, :m].T + (rows_c[:, :nc] - c_m * rq @ coupling.T) @ p_c
-    g = np.zeros((d.dropper_force.size, 4))
-    for q in range(d.dropper_force.size):
-        sd = d.dropper_span[q]
-        ncd = d.n_coupled[d.span_type[sd]]
-        g[q] = (d.dropper_c[q, :ncd] - c_m * d.dropper_h[c, q, :ncd]) @ p_b[d.coupled[sd, :ncd]]
-        if sd == s:
-            g[q] += rows_q[:, :m] @ d.dropper_q[q, :m]
-    g_full = g.copy()
-    drops = d.element_droppers[e]
-    ok = drops >= 0
-    g_full[drops[ok]] += d.element_dropper_residual[e][:, ok].T
-    return p_b, comp, g, g_full
-
-
-def _dropper_elongations(d: _Arrays, c: int, vec: np.ndarray) -> np.ndarray:
-    n_q = d.modal_offset[-1]
-    out = np.zeros(d.dropper_force.size)
-    for q in range(out.size):
-        s = d.dropper_span[q]
-        off = d.modal_offset[s]
-        k = d.kept[c, s]
-        nc = d.n_coupled[d.span_type[s]]
-        out[q] = (
-            d.dropper_q_plain[q, :k] @ vec[off : off + k] + d.dropper_c[q, :nc] @ vec[n_q + d.coupled[s, :nc]]
-        )
-    return out
-
-
-def _run_numpy(d: _Arrays, st: _Arrays, progress: Callable[[float], None] | None) -> None:  # noqa: C901
-    """The reference time loop: the compiled loop's steps in numpy."""
-    cf = d.coefficients
-    e1, e2, e3, g1, g2, g3 = cf[:6]
-    a0, a1, a2, a3, a4, a5 = cf[6:12]
-    kh, beta, c_m = cf[12:15]
-    n_spans = d.span_type.size
-    n_q = d.modal_offset[-1]
-    head = d.y_star.size - 1
-    width = (d.interface_rhs_rows.shape[2] - 1) // 2
-    n_steps = d.element.size
-    kappa, N0 = d.dropper_kappa, d.dropper_force
-    contact = bool(st.flags[0])
-    current = -1
-    report_every = max(1, n_steps // 100)
-    u, v, acc_s, e_vec, y = st.u, st.v, st.a, st.e, st.y
-    history = PassageHistory.from_arrays(st, 0, 0)
-    spans = [
-        (s, d.span_type[s], d.modal_offset[s], d.coupled[s, : d.n_coupled[d.span_type[s]]])
-        for s in range(n_spans)
-    ]
-    for k in range(1, n_steps):
-        if progress is not None and k % report_every == 0:
-            progress(k / n_steps)
-        c = d.config[k]
-        if c != st.flags[1]:
-            for s, _, off, _ in spans:
-                drop = slice(off + d.kept[c, s], d.modal_offset[s + 1])
-                for vec in (u, v, acc_s, e_vec, y):
-                    vec[drop] = 0.0
-            st.Bu[:] = _dropper_elongations(d, c, u)
-            st.Bv[:] = _dropper_elongations(d, c, v)
-            st.Ba[:] = _dropper_elongations(d, c, acc_s)
-            st.flags[1] = c
-            current = -1
-        el = d.element[k]
-        if el != current:
-            rows_q, rows_c = _element_rows(d, el)
-            p_b, comp, g_modal, g_full = _element_responses(d, c, el, rows_q, rows_c)
-            current = el
-        h = d.shape[k]
-        s_el = d.element_span[el]
-        kept = d.kept[c]
-        # 1. Interface part of K̂⁻¹ M e.
-        e_b = np.pad(e_vec[n_q:], width)
-        z = np.einsum("rk,rk->r", d.interface_rhs_rows[c], sliding_window_view(e_b, 2 * width + 1))
-        for s, t, off, cpl in spans:
-            m = kept[s]
-            z[cpl] += d.coupling[t, : cpl.size, :m] @ (d.weight[t, :m] * e_vec[off : off + m])
-        x_b = _schur_solve(d, c, z)
-        g_c = [e_vec[n_q + cpl] - c_m * x_b[cpl] for s, t, off, cpl in spans]
-        # 2. Droppers' elongations of u_known.
-        dl_known = np.empty(N0.size)
-        for q in range(N0.size):
-            sd = d.dropper_span[q]
-            s, t, off, cpl = spans[sd]
-            m = kept[sd]
-            dl_known[q] = (
-                d.dropper_q[q, :m] @ e_vec[off : off + m]
-                + d.dropper_h[c, q, : cpl.size] @ g_c[sd]
-                + d.dropper_c[q, : cpl.size] @ x_b[cpl]
-            )
-        dl_known += g1 * st.Bu + g2 * st.Bv + g3 * st.Ba
-        rate_term = beta * d.dropper_rate * (a1 * st.Bu + a4 * st.Bv + a5 * st.Ba)
-        s, t, off, cpl = spans[s_el]
-        m = kept[s_el]
-        x_q = (e_vec[off : off + m] + g_c[s_el] @ d.coupling[t, : cpl.size, :m]) * d.inverse_diagonal[t, :m]
-        u_q = x_q + y[off : off + m]
-        u_c = x_b[cpl] + y[n_q + cpl]
-        wire = h @ (rows_q[:, :m] @ u_q + rows_c[:, : cpl.size] @ u_c)
-        rhs_p = d.pantograph_mass @ (a0 * st.y_p + a2 * st.yd_p + a3 * st.ydd_p) + d.pantograph_damping @ (
-            a1 * st.y_p + a4 * st.yd_p + a5 * st.ydd_p
-        )
-        y_known = d.pantograph_inverse @ (rhs_p + d.load_p)
-        gap_known = y_known[head] - d.wire_z[k] - wire
-        c_cc = h @ comp @ h + d.y_star[head]
-        g_dc = g_full @ h
-        gm_dc = g_modal @ h
-        G = d.dropper_flexibility[c]
-        # 3. Contact force and slack droppers (the exact passage's active set).
-        step = settle(contact, st.slack.copy(), gap_known, c_cc, g_dc, dl_known, rate_term, kh, kappa, N0, G)
-        contact, st.slack[:], f, idx, lam, elastic = step[:6]
-        # 4. The response on the interface, then every span's modes with the Newmark update.
-        x_b = x_b + f * (p_b @ h) + lam @ d.dropper_interface[c, idx]
-        for s, t, off, cpl in spans:
-            m = kept[s]
-            fq = e_vec[off : off + m].copy()
-            if s == s_el:
-                fq += f * (h @ rows_q[:, :m])
-            for q, lq in zip(idx, lam, strict=True):
-                if d.dropper_span[q] == s:
-                    fq += lq * d.dropper_q_plain[q, :m]
-            fq += (e_vec[n_q + cpl] - c_m * x_b[cpl]) @ d.coupling[t, : cpl.size, :m]
-            p = slice(off, off + m)
-            u_new = fq * d.inverse_diagonal[t, :m] + y[p]
-            _newmark(u, v, acc_s, e_vec, y, p, u_new, cf)
-        _newmark(u, v, acc_s, e_vec, y, slice(n_q, None), x_b + y[n_q:], cf)
-        bu = dl_known + gm_dc * f + d.dropper_modal_flexibility[c][:, idx] @ lam
-        du = bu - st.Bu
-        ba = a0 * du - a2 * st.Bv - a3 * st.Ba
-        st.Bv[:] = a1 * du - a4 * st.Bv - a5 * st.Ba
-        st.Ba[:] = ba
-        st.Bu[:] = bu
-        du = y_known - f * d.y_star - st.y_p
-        acc_p = a0 * du - a2 * st.yd_p - a3 * st.ydd_p
-        st.yd_p[:] = a1 * du - a4 * st.yd_p - a5 * st.ydd_p
-        st.ydd_p[:] = acc_p
-        st.y_p[:] += du
-        s, t, off, cpl = spans[s_el]
-        m = kept[s_el]
-        uplift = h @ (rows_q[:, :m] @ u[off : off + m] + rows_c[:, : cpl.size] @ u[n_q + cpl])
-        history.record(
-            k, f, st.y_p[head], uplift, u[n_q + d.support], elastic, st.slack, idx.size > 0, step.resolved
-        )
-    st.flags[2], st.flags[3] = history.slack_steps, history.unresolved_steps
-    st.flags[0] = int(contact)
-
-
-def _run_reference(fields: dict, state: dict, progress: Callable[[float], None] | None) -> None:
-    _run_numpy(_Arrays(fields), _Arrays(state), progress)
-
-
-BACKENDS = {"numpy": _run_reference, "numba": _run_compiled}
-"""The span-mode passage's time loops by name; ``"auto"`` takes numba where it is installed."""
-
-
-def _newmark(u, v, acc, e_vec, y, p, u_new, cf) -> None:
-    """Newmark update of the coordinates ``p`` to ``u_new``, and the next step's e and y there."""
-    du = u_new - u[p]
-    acc_new = cf[6] * du - cf[8] * v[p] - cf[9] * acc[p]
-    v_new = cf[7] * du - cf[10] * v[p] - cf[11] * acc[p]
-    u[p], v[p], acc[p] = u_new, v_new, acc_new
-    e_vec[p] = cf[0] * u_new + cf[1] * v_new + cf[2] * acc_new
-    y[p] = cf[3] * u_new + cf[4] * v_new + cf[5] * acc_new

@@ -1,0 +1,70 @@
+"""The passage protocol (docs/model.md, 'Time integration and the fast method'): both dynamic models from one
+table, a passage of several pantographs refused clearly while the loops take one, and the numbers the time
+loops gave before the protocol (tests/data/recorded_passages.npz) reproduced through it."""
+
+from __future__ import annotations
+
+import pytest
+from conftest import assert_recorded
+
+from catenary_env.dynamics import exact, span_modes
+from catenary_env.dynamics.models import DYNAMIC_MODELS
+from catenary_env.dynamics.protocol import ContactPoint, Passage
+from catenary_env.model.design import level_design
+from catenary_env.pipeline import DYNAMICS, FIDELITIES, Fidelity, run_passage, solve_static
+
+SPEED = 300 / 3.6
+
+
+def test_one_table_names_the_fidelities_models():
+    assert DYNAMICS == tuple(DYNAMIC_MODELS) == ("span-modes", "exact")
+    assert DYNAMIC_MODELS["exact"][:2] == (exact.prepare, exact.run)
+    assert DYNAMIC_MODELS["span-modes"][:2] == (span_modes.prepare, span_modes.run)
+    assert {fidelity.dynamics for fidelity in FIDELITIES.values()} <= set(DYNAMIC_MODELS)
+
+
+def test_the_exact_model_reproduces_the_recorded_level_design_on_the_test_fidelity(
+    benchmark_catenary, benchmark_pantograph_definition, recorded_passages
+):
+    pytest.importorskip("numba")  # recorded with the compiled loop, which "auto" takes
+    fidelity = FIDELITIES["test"]
+    static = solve_static(benchmark_catenary, level_design(benchmark_catenary), fidelity)
+    sim = run_passage(static, benchmark_pantograph_definition, SPEED, fidelity, 170.0)
+    assert_recorded(recorded_passages, "exact_b1_test_numba", sim.trajectory, sim.statistics.std)
+
+
+def test_the_span_mode_model_reproduces_the_recorded_evaluation_passage(
+    benchmark_catenary, benchmark_pantograph_definition, recorded_passages
+):
+    pytest.importorskip("numba")
+    fidelity = Fidelity(
+        n_spans=4, analysis_spans=2, contact_wire_element=1.0, messenger_wire_element=2.0, time_step=2e-3
+    )
+    static = solve_static(benchmark_catenary, level_design(benchmark_catenary), fidelity)
+    sim = run_passage(static, benchmark_pantograph_definition, SPEED, fidelity, 190.0, statistics_only=True)
+    assert_recorded(recorded_passages, "span_modes_pipeline_numba", sim.trajectory, sim.statistics.std)
+
+
+@pytest.mark.parametrize("dynamics", list(DYNAMIC_MODELS))
+def test_a_second_pantograph_is_refused_by_name(dynamics, benchmark_static, benchmark_pantograph_definition):
+    from catenary_env.dynamics.linear_system import linearise
+
+    model = DYNAMIC_MODELS[dynamics]
+    fidelity = Fidelity(n_spans=5, time_step=2e-3, dynamics=dynamics)
+    prepared = model.prepare(linearise(benchmark_static), fidelity)
+    first = ContactPoint(benchmark_pantograph_definition, 170.0)
+    second = ContactPoint(benchmark_pantograph_definition, 170.0, offset=20.0)
+    with pytest.raises(ValueError, match="passage.contact_points: 2 pantographs"):
+        model.run(prepared, Passage(SPEED, (first, second), n_steps=5))
+
+
+def test_a_passage_names_its_wrong_field(benchmark_pantograph_definition):
+    point = ContactPoint(benchmark_pantograph_definition, 170.0)
+    with pytest.raises(ValueError, match="passage.speed"):
+        Passage(0.0, (point,))
+    with pytest.raises(ValueError, match="passage.contact_points"):
+        Passage(SPEED, ())
+    with pytest.raises(ValueError, match="the first pantograph's 0"):
+        Passage(SPEED, (ContactPoint(benchmark_pantograph_definition, 170.0, offset=5.0),))
+    with pytest.raises(ValueError, match="passage.n_steps"):
+        Passage(SPEED, (point,), n_steps=0)
