@@ -205,6 +205,7 @@ def check_fidelity(catenary: CatenaryDefinition, fidelity: Fidelity) -> None:
             )
 
 
+@single_threaded
 def solve_static(catenary: CatenaryDefinition, design: Design, fidelity: Fidelity) -> StaticSolution:
     """Check the design and find its static shape (raises ShapeFindingError if Newton fails)."""
     check_design(catenary, design)
@@ -232,6 +233,7 @@ def check_uplift(pantograph: PantographDefinition, uplift_force: float | None) -
     return force
 
 
+@single_threaded
 def run_passage(
     static: StaticSolution,
     pantograph: PantographDefinition,
@@ -276,6 +278,7 @@ def _statistics_steps(catenary: CatenaryDefinition, fidelity: Fidelity, speed: f
     return int(np.floor(end / (speed * fidelity.time_step))) + 1
 
 
+@single_threaded
 def prepare_dynamics(system: LinearSystem, fidelity: Fidelity) -> PreparedExact | PreparedSpanModes:
     """The design's part of the passage on the fidelity's model: the exact model's factorisation (none for a
     system only its straightforward loop integrates, :attr:`LinearSystem.rayleigh`), or the span modes and

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from catenary_env.blas_threads import limit_process
 from catenary_env.model.design import level_design
 from catenary_env.model.presets import load_catenary, load_pantograph
 from catenary_env.pipeline import Fidelity, solve_static
@@ -21,6 +22,10 @@ from catenary_env.statics.shape_finding import StaticSolution
 # No uplift calibration is read from or written to the user's disk cache: tests that replace the simulator
 # must not leave their fake forces there (tests/test_calibration_cache.py sets a folder of its own).
 os.environ["CATENARY_ENV_CACHE"] = "off"
+# The tests run on one BLAS thread, as evaluations do (docs/performance.md, 'Threads'): tests that call the
+# dynamics below the pipeline compare contact forces with recorded ones to 1e-9 N, and a BLAS reduction
+# split over two threads adds in another order (the span modes then differ by some 1e-7 N).
+limit_process()
 
 
 def requires(module: str) -> pytest.MarkDecorator:
