@@ -423,7 +423,7 @@ def _drawn_speeds(
     kept = speeds[~held_out]
     if kept.size == 0:
         raise ValueError(
-            f"excluded_speeds = {excluded!r}: no whole km/h speed of speed_range ({lo:g}, {hi:g}) km/h is left"
+            f"excluded_speeds = {excluded!r}: no whole km/h speed of ({lo:g}, {hi:g}) km/h is left to draw"
         )
     return kept
 

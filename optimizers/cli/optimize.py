@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shlex
 import sys
 from pathlib import Path
 from typing import Any
@@ -303,7 +304,7 @@ def rl_env_spec(problem: str, args: argparse.Namespace) -> Any:
 def rl_command(args: argparse.Namespace, policy: str | os.PathLike[str]) -> str:
     """The ``catenary optimize`` command that reproduces (resumes) an RL run and saves its policy again."""
     words = [
-        "catenary optimize", args.problem, "--optimizer", args.optimizer, "--budget", str(args.budget),
+        "catenary", "optimize", args.problem, "--optimizer", args.optimizer, "--budget", str(args.budget),
         "--seed", str(args.seed), "--fidelity", args.fidelity, "--workers", str(args.workers or 1),
     ]  # fmt: skip
     if args.speed_range is not None:
@@ -313,7 +314,7 @@ def rl_command(args: argparse.Namespace, policy: str | os.PathLike[str]) -> str:
     else:
         words += ["--speed", f"{args.speed:g}"]
     words += ["--store", str(args.store), "--resume-or-start", "--save-policy", str(policy)]
-    return " ".join(words)
+    return shlex.join(words)
 
 
 def _summary(result: OptimizationResult, store: str, policy: Path | None = None) -> str:
