@@ -383,6 +383,28 @@ def break_even(training: float, ga_per_speed: float) -> float:
     return float(math.ceil(training / (ga_per_speed - 1.0)))
 
 
+def break_even_by_gap(
+    curves: list[dict[str, Any]],
+    ga_runs: list[dict[str, Any]],
+    problem: str,
+    training: float,
+    gaps_percent: tuple[float, ...] = (0.0, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0),
+) -> list[tuple[float, float, float]]:
+    """For each accepted gap g to the GA optimum (%): the simulations a GA run needed to come within g of
+    its own optimum (mean over the table's speeds), and the break-even number of speeds of a policy of
+    ``training`` simulations that reaches that gap: (g, GA simulations, break-even N)."""
+    runs = [r for r in ga_runs if r["problem"] == problem and math.isfinite(r["best_sigma_N"])]
+    out = []
+    for gap in gaps_percent:
+        needed = [
+            ga_simulations_to(curves, problem, r["speed_kmh"], r["best_sigma_N"] * (1.0 + gap / 100.0))
+            for r in runs
+        ]
+        mean = float(np.mean(needed)) if needed else math.nan
+        out.append((gap, mean, break_even(training, mean)))
+    return out
+
+
 def policy_gaps(designs: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per problem, learner, seed and speed: σ of the policy's design, of the GA optimum, of the reference,
     and the gap policy / GA optimum (%; NaN where the policy's design is infeasible)."""
@@ -504,7 +526,7 @@ def report(folder: Path) -> str:
     text = "\n\n".join(f"### {title}\n\n{markdown_table(rows, columns)}" for title, rows, columns in sections)
     (folder / "amortised.md").write_text(text + "\n", encoding="utf-8")
     _learning_figure(steps, window, folder / "learning_curves.png")
-    _ledger_figure(ledger, folder / "ledger.png")
+    _ledger_figure(ledger, curves, ga_runs, folder / "ledger.png")
     return text
 
 
@@ -594,27 +616,47 @@ def _learning_figure(steps: list[dict[str, Any]], window: int, path: Path) -> No
     plt.close(fig)
 
 
-def _ledger_figure(ledger: list[dict[str, Any]], path: Path) -> None:
+def _ledger_figure(
+    ledger: list[dict[str, Any]], curves: list[dict[str, Any]], ga_runs: list[dict[str, Any]], path: Path
+) -> None:
+    """Left: simulations against the number of speeds, one policy against a GA run per speed. Right: the
+    break-even number of speeds against the gap to the GA optimum one accepts, with each policy's gap."""
     from catenary_env.plots import pyplot
 
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7.0, 4.6))
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12.0, 4.8))
+    colours: dict[str, str] = {}  # a problem's GA line in the colour of its first policy
     for (problem, learner), rows in _groups(ledger, "problem", "learner").items():
         n = [r["n_speeds"] for r in rows]
-        line = ax.plot(n, [r["policy_simulations"] for r in rows], "-o", markersize=3,
-                       label=f"{problem} {learner} policy (gap {rows[0]['gap_percent']:+.0f} %)")  # fmt: skip
-        colour = line[0].get_color()
-        ax.plot(
-            n, [r["ga_simulations"] for r in rows], "--", color=colour, label=f"{problem}: a GA run per speed"
-        )
-        ax.plot(n, [r["ga_simulations_to_policy_sigma"] for r in rows], ":", color=colour,
-                label=f"{problem}: GA stopped at the {learner} policy's σ")  # fmt: skip
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("number of speeds N")
-    ax.set_ylabel("simulations")
-    ax.set_title("Amortisation: one policy against a GA run per speed")
-    ax.legend(fontsize=7)
+        label = f"{problem} {learner} policy (gap {rows[0]['gap_percent']:+.0f} %)"
+        colour = left.plot(n, [r["policy_simulations"] for r in rows], "-o", markersize=3, label=label)[
+            0
+        ].get_color()
+        if problem not in colours:
+            colours[problem] = colour
+            left.plot(
+                n, [r["ga_simulations"] for r in rows], "--", color=colour, label=f"{problem}: GA per speed"
+            )
+        label = f"{problem}: GA stopped at the {learner} policy's σ"
+        left.plot(n, [r["ga_simulations_to_policy_sigma"] for r in rows], ":", color=colour, label=label)
+        first = rows[0]
+        label = f"{problem} {learner} policy"
+        right.plot([first["gap_percent"]], [first["break_even_same_sigma"]], "o", color=colour, label=label)
+    for problem, colour in colours.items():
+        training = next(r["training_simulations"] for r in ledger if r["problem"] == problem)
+        points = [
+            (g, n) for g, _, n in break_even_by_gap(curves, ga_runs, problem, training) if math.isfinite(n)
+        ]
+        if points:
+            right.plot(
+                *zip(*points, strict=True), "-", color=colour, label=f"{problem}: a policy of {training:.0f}"
+            )
+    left.set(xscale="log", yscale="log", xlabel="number of speeds N", ylabel="simulations")
+    left.set_title("One policy against a GA run per speed")
+    right.set(yscale="log", xlabel="gap to the GA optimum accepted (%)", ylabel="break-even number of speeds")
+    right.set_title("Speeds from which the policy is cheaper")
+    left.legend(fontsize=7)
+    right.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
