@@ -128,3 +128,27 @@ def test_a_problem_whose_reference_is_not_action_0_is_refused():
     rl_amortised.check_starts_at_reference("synthetic-speed-quadratic")
     with pytest.raises(ValueError, match="B2"):
         rl_amortised.check_starts_at_reference("B2")
+
+
+def test_a_full_run_is_reproduced_by_the_catenary_optimize_command_beside_its_policy(tmp_path):
+    """The full setting trains with the learners' defaults, so the command written beside each policy is a
+    ``catenary optimize`` that makes the same run (the same env, options and budget: it resumes it)."""
+    import argparse
+    import dataclasses
+    import shlex
+
+    from optimizers.cli.optimize import add_arguments, rl_env_spec
+    from optimizers.rl import LEARNERS, EnvSpec
+
+    config = rl_amortised.Config(full=True, out=tmp_path)
+    store, policy = tmp_path / "runs.sqlite", tmp_path / "sac.zip"
+    command = rl_amortised.reproduce_command(config, store, "B1", "sac", 2, policy)
+    words = shlex.split(command)
+    assert words[:2] == ["catenary", "optimize"]
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    args = parser.parse_args(words[2:])
+    assert (args.optimizer, args.budget, args.seed, args.store) == ("sac", 10_000, 2, str(store))
+    expected = EnvSpec("Catenary-B1-v0", None, rl_amortised.SPEED_RANGE, "study", rl_amortised.HELD_OUT)
+    assert rl_env_spec("B1", args) == expected
+    assert dataclasses.replace(LEARNERS["sac"](), n_envs=args.workers) == config.learner_options("sac")
