@@ -428,16 +428,9 @@ def _recording_vec_env_class() -> type:
                 return None
             outcome, reward = hit
             record = EvaluationRecord(
-                index,
-                tuple(float(v) for v in x),
-                outcome.feasible,
-                outcome.sigma,
-                outcome.reason,
-                0.0,
-                True,
-                True,
-                speed,
-            )
+                index, tuple(float(v) for v in x), outcome.feasible, outcome.sigma, outcome.reason, 0.0,
+                True, True, speed,
+            )  # fmt: skip
             return record, float(reward), True
 
     return RecordingVecEnv
