@@ -520,7 +520,11 @@ def report(folder: Path) -> str:
     write_csv(folder / "ledger.csv", ledger)
     sections = [
         (f"Learning curves (windows of {window} steps)", learning_summary(steps, window), LEARNING_COLUMNS),
-        ("Policies against a GA run per speed", speed_table(designs), TABLE_COLUMNS),
+        (
+            f"Policies against a GA run per speed ({_ga_budgets(ga_runs)})",
+            speed_table(designs),
+            TABLE_COLUMNS,
+        ),
         ("Amortisation ledger", [r for r in ledger if r["n_speeds"] == LEDGER_SPEEDS[0]], LEDGER_COLUMNS),
     ]
     text = "\n\n".join(f"### {title}\n\n{markdown_table(rows, columns)}" for title, rows, columns in sections)
@@ -528,6 +532,12 @@ def report(folder: Path) -> str:
     _learning_figure(steps, window, folder / "learning_curves.png")
     _ledger_figure(ledger, curves, ga_runs, folder / "ledger.png")
     return text
+
+
+def _ga_budgets(ga_runs: list[dict[str, Any]]) -> str:
+    """The GA runs' budgets and populations, in words."""
+    budgets = sorted({(int(r["budget"]), int(r["population"])) for r in ga_runs})
+    return "; ".join(f"GA: {b} simulations, population {p}" for b, p in budgets)
 
 
 def _groups(rows: list[dict[str, Any]], *keys: str) -> dict[tuple[Any, ...], list[dict[str, Any]]]:

@@ -55,7 +55,8 @@ def _check_study(config: rl_amortised.Config, tmp_path: Path, monkeypatch: pytes
     assert {r["speed_kmh"] for r in ga} == {v for v, _ in config.speeds}
     assert all(r["n_simulations"] == config.ga_budget for r in ga)
     text = (folder / "amortised.md").read_text(encoding="utf-8")
-    assert "### Policies against a GA run per speed" in text and "### Amortisation ledger" in text
+    assert f"### Policies against a GA run per speed (GA: {config.ga_budget} simulations" in text
+    assert "### Amortisation ledger" in text
     for name in OUTPUTS:
         assert (folder / name).stat().st_size > 0
 
