@@ -318,3 +318,20 @@ def test_vector_envs_in_worker_processes_record_every_step_and_resume(tmp_path, 
     assert _comparable(resumed.history) == _comparable(full.history)
     with pytest.raises(ValueError, match="multiple of the 2 envs"):
         train_design_policy(spec, SYNTHETIC, budget=47, seed=3, options=options)
+
+
+@pytest.mark.slow  # 40 s of SAC training on the synthetic problem: the default options' tuning check
+def test_sac_with_its_defaults_learns_the_design_per_speed_at_held_out_speeds_too():
+    from optimizers.synthetic_env import ENV_ID as SYNTHETIC_ENV
+    from optimizers.synthetic_env import PROBLEM as SYNTHETIC
+
+    bands = ((225.0, 235.0), (285.0, 295.0))
+    spec = EnvSpec(
+        SYNTHETIC_ENV, speed_kmh=None, speed_range=(200.0, 320.0), fidelity="test", excluded_speeds=bands
+    )
+    policy, result = train_design_policy(spec, SYNTHETIC, budget=2000, seed=0, options=SACOptions())
+    assert not any(a <= r.speed_kmh <= b for r in result.history for a, b in bands)
+    for speed in (210.0, 230.0, 260.0, 290.0, 320.0):  # 230 and 290 km/h never trained on
+        x = design_for_speed(policy, SYNTHETIC, speed)
+        outcome = SYNTHETIC.simulate(tuple(x), speed, "test")
+        assert outcome.feasible and outcome.sigma < 1.05 * SYNTHETIC.grid_optimum(speed)[1], speed
