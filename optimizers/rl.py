@@ -127,6 +127,15 @@ class EnvSpec:
     fidelity: str = "study"
     excluded_speeds: tuple[tuple[float, float], ...] = ()
 
+    def as_dict(self) -> dict[str, Any]:
+        """The spec as JSON values, part of a run's identity and of its steps' key in the store; without
+        ``excluded_speeds`` when there are none, as before they existed, so that a store's earlier runs and
+        steps still match."""
+        data = dataclasses.asdict(self)
+        if not self.excluded_speeds:
+            del data["excluded_speeds"]
+        return data
+
     def make(self) -> Any:
         """Build the env with ``gymnasium.make``."""
         import gymnasium
@@ -530,7 +539,10 @@ def train_design_policy(
             "stepped at once"
         )
     space = GridSpace.from_problem(problem)
-    run_options = {"env": dataclasses.asdict(env_spec), name: dataclasses.asdict(settings)}
+    learner_options = dataclasses.asdict(settings)
+    if settings.n_envs == 1:  # a run on one env keeps the identity it had before vector envs
+        del learner_options["n_envs"]
+    run_options = {"env": env_spec.as_dict(), name: learner_options}
     speed = None if env_spec.speed_range is not None else env_spec.speed_kmh
     config = RunConfig(
         name, space.store_key, int(budget), int(seed), speed, env_spec.fidelity,
@@ -615,7 +627,7 @@ def _vector_env(env_spec: EnvSpec, recorder: RunRecorder, space: GridSpace, sett
     standardised as the options ask."""
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNormalize
 
-    env_key = json.dumps(dataclasses.asdict(env_spec), sort_keys=True)
+    env_key = json.dumps(env_spec.as_dict(), sort_keys=True)
     if settings.n_envs == 1:
         inner = DummyVecEnv([env_spec.make])
     else:
@@ -801,7 +813,7 @@ def save_policy(
         "learner": learner_name_of_model(policy.model),
         "variable_names": list(problem.variable_names),
         "model_fingerprint": str(getattr(problem, "model_fingerprint", "")),
-        "env_spec": dataclasses.asdict(policy.env_spec),
+        "env_spec": policy.env_spec.as_dict(),
         "observation_scaling": None
         if policy.observation_scaling is None
         else {

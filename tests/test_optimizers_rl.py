@@ -335,3 +335,28 @@ def test_sac_with_its_defaults_learns_the_design_per_speed_at_held_out_speeds_to
         x = design_for_speed(policy, SYNTHETIC, speed)
         outcome = SYNTHETIC.simulate(tuple(x), speed, "test")
         assert outcome.feasible and outcome.sigma < 1.05 * SYNTHETIC.grid_optimum(speed)[1], speed
+
+
+def test_a_run_on_one_env_without_held_out_speeds_keeps_its_identity_from_before(tmp_path):
+    """Runs made before vector envs and held-out speeds existed (PPO on one env) must still be found in a
+    store, to resume them and share their steps: neither ``n_envs`` nor ``excluded_speeds`` is part of the
+    identity of such a run."""
+    import json
+
+    from optimizers.store import RunStore
+
+    store = tmp_path / "runs.sqlite"
+    train_design_policy(SPEED_RANGE, PROBLEM, budget=8, seed=0, options=SMALL, store=store)
+    with RunStore(store) as runs:
+        (run,) = runs.runs()
+    options = json.loads(str(run["options"]))
+    assert options["env"] == {
+        "env_id": ENV_ID,
+        "speed_kmh": None,
+        "speed_range": [200.0, 300.0],
+        "fidelity": "test",
+    }
+    assert set(options["ppo"]) == {
+        "learning_rate", "n_steps", "batch_size", "n_epochs", "ent_coef", "net_arch", "log_std_init",
+        "normalize_observation", "normalize_reward", "device",
+    }  # fmt: skip
