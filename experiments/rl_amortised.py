@@ -171,11 +171,6 @@ class Config:
         training, held_out = (TRAINING_SPEEDS, HELD_OUT_SPEEDS) if self.full else ((260.0,), (230.0,))
         return tuple(sorted([(v, False) for v in training] + [(v, True) for v in held_out]))
 
-    @property
-    def window(self) -> int:
-        """Steps per point of the learning curves."""
-        return 250 if self.full else 4
-
 
 def env_id(problem: str) -> str:
     """The design env of a problem: the catenary envs', or the synthetic one's."""
