@@ -1,4 +1,5 @@
-"""RL design policies: stable-baselines3 PPO trained on a design env (``pip install catenary-env[rl]``).
+"""RL design policies: stable-baselines3 PPO or SAC trained on a design env (``pip install
+catenary-env[rl]``).
 
 A design env (docs/problems.md, 'Environments') has one-step episodes: the observation carries the task
 context (the normalised speed), the action in ``Box(-1, 1)`` is the whole design, the reward is −σ. Trained
@@ -14,10 +15,17 @@ The env contract this module relies on, and nothing else, so it works on any Gym
   ``info["objective"]`` (σ behind the reward, N), ``info["wall_time"]`` (s) and ``info["speed_kmh"]``
   are used where present (σ falls back to −reward, the speed to the run's).
 
+Two learners (:data:`LEARNERS`): PPO, on-policy, and SAC, off-policy, which learns from every step it has
+made (a replay buffer) and suits one-step episodes, where a step is costly and its reward is the whole
+return. Both start where a designer starts, at the reference design with a small spread
+(:data:`POLICY_SPREAD`; :class:`PPOOptions`, :class:`SACOptions`).
+
 Every step is a simulation and is charged: ``total_timesteps`` is the budget, and training stops after
-exactly ``budget`` steps. A wrapper logs each step into the run's history and its store, so an
-interrupted training run resumes like the other optimisers: the stored steps are replayed (the env is
-reset but not stepped, the stored reward is returned) and PPO, seeded, takes the same actions again.
+exactly ``budget`` steps. The envs are stepped ``n_envs`` at a time, in worker processes when more than
+one (SB3's ``SubprocVecEnv``, each worker on one BLAS and one torch thread). A vector env wrapper, in this
+process, logs each step into the run's history and its store in the order of the envs, so an interrupted
+training run resumes like the other optimisers: the stored steps are replayed (the env is reset but not
+stepped, the stored reward is returned) and the learner, seeded, takes the same actions again.
 The env owns its simulations and reward convention, so RL runs neither use nor feed the other optimisers'
 design cache; among themselves they share it: a step another RL run made on the same env (the same
 :class:`EnvSpec`), the same design at the same speed, is served from the store (charged, not simulated).
@@ -42,11 +50,11 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import json
 import math
 import os
 import tempfile
-import time
 import zipfile
 from contextlib import ExitStack
 from dataclasses import dataclass
@@ -70,8 +78,10 @@ __all__ = [
     "DesignPolicy",
     "EnvSpec",
     "ObservationScaling",
+    "LEARNERS",
     "PPOOptions",
     "PolicyRecord",
+    "SACOptions",
     "design_for_speed",
     "import_stable_baselines3",
     "load_policy",
@@ -106,19 +116,37 @@ class EnvSpec:
         Lowest and highest speed, km/h, drawn at each reset: a speed-conditioned policy.
     fidelity : str
         ``"study"`` or ``"test"``.
+    excluded_speeds : tuple of (float, float)
+        With ``speed_range``: bands of speeds, km/h, never drawn in training (held out, to evaluate the
+        policy where it has not been trained; the env's ``excluded_speeds``).
     """
 
     env_id: str
     speed_kmh: float | None = 300.0
     speed_range: tuple[float, float] | None = None
     fidelity: str = "study"
+    excluded_speeds: tuple[tuple[float, float], ...] = ()
+
+    def as_dict(self) -> dict[str, Any]:
+        """The spec as JSON values, part of a run's identity and of its steps' key in the store; without
+        ``excluded_speeds`` when there are none, as before they existed, so that a store's earlier runs and
+        steps still match."""
+        data = dataclasses.asdict(self)
+        if not self.excluded_speeds:
+            del data["excluded_speeds"]
+        return data
 
     def make(self) -> Any:
         """Build the env with ``gymnasium.make``."""
         import gymnasium
 
         if self.speed_range is not None:
-            return gymnasium.make(self.env_id, speed_range=tuple(self.speed_range), fidelity=self.fidelity)
+            bands = (
+                {"excluded_speeds": tuple(map(tuple, self.excluded_speeds))} if self.excluded_speeds else {}
+            )
+            return gymnasium.make(
+                self.env_id, speed_range=tuple(self.speed_range), fidelity=self.fidelity, **bands
+            )
         return gymnasium.make(self.env_id, speed_kmh=self.speed_kmh, fidelity=self.fidelity)
 
 
@@ -168,6 +196,8 @@ class PPOOptions:
     normalize_reward : bool
         Scale rewards by their running standard deviation (SB3's ``VecNormalize``); the history and
         the store keep the env's own rewards.
+    n_envs : int
+        Envs stepped at once (:func:`train_design_policy`): a rollout is ``n_steps * n_envs`` steps.
     device : str
         Torch device; ``"cpu"`` suits these small networks.
     """
@@ -181,7 +211,83 @@ class PPOOptions:
     log_std_init: float = math.log(POLICY_SPREAD)
     normalize_observation: bool = True
     normalize_reward: bool = True
+    n_envs: int = 1
     device: str = "cpu"
+
+
+@dataclass(frozen=True)
+class SACOptions:
+    """SAC hyper-parameters (stable-baselines3 names), chosen once for one-step design episodes.
+
+    Where the policy starts: as PPO's (:class:`PPOOptions`), at the reference design with a spread of
+    :data:`POLICY_SPREAD`. The first ``learning_starts`` steps are a warm-up whose actions are drawn
+    around action 0 with the standard deviation ``start_spread`` (stable-baselines3 would draw them
+    uniformly over the box: mostly infeasible designs); the actor's mean layer starts at zero and its
+    log-std layer at ln ``start_spread``, so its first proposals after the warm-up have the same spread
+    about the reference design (through SAC's tanh, which is nearly linear there).
+
+    An episode is one step, so ``gamma = 0``: the critic learns the expected reward of a design at a speed,
+    Q(s, a) = E[-σ], and the actor the design that maximises it (with an entropy bonus, tuned to a
+    target entropy, that keeps exploring). One gradient step per env step.
+
+    Tuning, once, on one seed of the synthetic problem whose optimum moves with the speed
+    (``optimizers/synthetic_env.py``; no catenary simulation spent): five settings of 2000 steps each,
+    judged by the mean σ of the last 256 steps and the gap of the policy's designs to the grid optimum at
+    210, 230 (held out), 260, 290 (held out) and 320 km/h. stable-baselines3's entropy coefficient
+    starting at 1 (``"auto"``) widened the spread far beyond the start (24.5 N, gaps 7-13 %);
+    ``"auto_0.01"`` (starting at 0.01, then tuned) gave 20.6 N and gaps of 1.5-2.7 %, PPO's defaults 22.2 N
+    and 2-6 %; a fixed 0.001, a learning rate of 3e-4 and batches of 64 did no better (gaps up to 7.5 %,
+    11 % and 3.1 %).
+
+    Attributes
+    ----------
+    learning_rate : float
+        Adam step size of the actor, the critics and the entropy coefficient.
+    buffer_size : int
+        Replay buffer, env steps (larger than any study's budget: nothing is forgotten).
+    learning_starts : int
+        Warm-up steps around the reference design before the first update.
+    batch_size : int
+        Replayed steps per update.
+    tau : float
+        Soft update of the target critics.
+    ent_coef : str or float
+        Entropy coefficient; ``"auto_0.01"`` starts it at 0.01 and tunes it to SB3's target entropy
+        (``-n_variables``).
+    net_arch : tuple of int
+        Hidden layer widths of the actor and the critics.
+    start_spread : float
+        Standard deviation of the first proposals, action units (the range being 2).
+    normalize_observation, normalize_reward : bool
+        As :class:`PPOOptions` (the replay buffer keeps the env's rewards; SB3 scales them when sampled).
+    n_envs : int
+        Envs stepped at once.
+    device : str
+        Torch device.
+    """
+
+    learning_rate: float = 1e-3
+    buffer_size: int = 100_000
+    learning_starts: int = 256
+    batch_size: int = 256
+    tau: float = 0.005
+    ent_coef: str | float = "auto_0.01"
+    net_arch: tuple[int, ...] = (64, 64)
+    start_spread: float = POLICY_SPREAD
+    normalize_observation: bool = True
+    normalize_reward: bool = True
+    n_envs: int = 1
+    device: str = "cpu"
+
+
+LearnerOptions = PPOOptions | SACOptions
+LEARNERS = {"ppo": PPOOptions, "sac": SACOptions}
+"""The RL learners by name (``catenary optimize --optimizer NAME``) and their hyper-parameters."""
+
+
+def learner_name(options: LearnerOptions) -> str:
+    """The registry name of the learner of ``options``."""
+    return next(name for name, kind in LEARNERS.items() if isinstance(options, kind))
 
 
 class ObservationScaling(NamedTuple):
@@ -210,11 +316,11 @@ class ObservationScaling(NamedTuple):
 
 @dataclass(frozen=True)
 class DesignPolicy:
-    """A trained design policy: the PPO model and the env it was trained on.
+    """A trained design policy: the learner's model and the env it was trained on.
 
     Attributes
     ----------
-    model : stable_baselines3.PPO
+    model : stable_baselines3.PPO or stable_baselines3.SAC
         The trained model.
     env_spec : EnvSpec
         The env (its observations are what the policy reads).
@@ -227,62 +333,126 @@ class DesignPolicy:
     observation_scaling: ObservationScaling | None = None
 
 
-def _recording_wrapper_class() -> type:
-    """The wrapper class, built on first use so that gymnasium is imported only here."""
-    import gymnasium
+class _Workers:
+    """The envs behind a stable-baselines3 vector env, stepped one by one: each either simulates its
+    action or only starts its next episode (a step served from the store), and then starts its next
+    episode, as SB3's vector envs do after a terminated episode. The envs of a ``SubprocVecEnv`` work at
+    once, each in its process."""
 
-    class RecordingWrapper(gymnasium.Wrapper):
-        """Log every step into the run (history, store); replay the steps a resumed run has stored, and
-        serve from the store a step an RL run on the same env (``env_key``: its EnvSpec as JSON) made."""
+    def __init__(self, venv: Any) -> None:
+        self.venv = venv
+        self.remotes = getattr(venv, "remotes", None)  # SubprocVecEnv: one pipe per worker process
 
-        def __init__(self, env: Any, recorder: RunRecorder, space: GridSpace, env_key: str) -> None:
-            super().__init__(env)
-            self.recorder = recorder
-            self.space = space
-            self.env_key = env_key
-            self._observation: Any = None
-            self._speed = recorder.config.speed_kmh
+    def run(self, actions: list[NDArray[np.float32] | None]) -> list[tuple[Any, float, dict[str, Any], Any]]:
+        """(observation of the next episode, reward, step info, reset info) per env; an env given None is
+        only reset (reward 0, info empty)."""
+        if self.remotes is None:
+            return [self._local(env, action) for env, action in zip(self.venv.envs, actions, strict=True)]
+        for remote, action in zip(self.remotes, actions, strict=True):
+            remote.send(("env_method", ("reset", [], {})) if action is None else ("step", action))
+        out = []
+        for remote, action in zip(self.remotes, actions, strict=True):
+            answer = remote.recv()
+            if action is None:
+                out.append((answer[0], 0.0, {}, answer[1]))
+            else:
+                observation, reward, _, info, reset_info = answer
+                out.append((observation, float(reward), info, reset_info))
+        return out
 
-        def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> Any:
-            observation, info = self.env.reset(seed=seed, options=options)
-            self._observation = observation
-            self._speed = _scalar(info.get("speed_kmh"), self.recorder.config.speed_kmh)
-            return observation, info
+    @staticmethod
+    def _local(env: Any, action: NDArray[np.float32] | None) -> tuple[Any, float, dict[str, Any], Any]:
+        reward, info = 0.0, {}
+        if action is not None:
+            _, reward, _, _, info = env.step(action)
+        observation, reset_info = env.reset()
+        return observation, float(reward), info, reset_info
 
-        def step(self, action: Any) -> Any:
-            x = self.space.from_action(action)
-            key = self.space.design_key(x)
-            index = self.recorder.next_index
+
+def _recording_vec_env_class() -> type:
+    """The recording vector env class, built on first use so that stable-baselines3 is imported only here."""
+    from stable_baselines3.common.vec_env import VecEnvWrapper
+
+    class RecordingVecEnv(VecEnvWrapper):
+        """Log every env step into the run (history, store), in order of the envs; serve from the store the
+        steps a resumed run has stored and those an RL run on the same env (``env_key``: its EnvSpec as
+        JSON) made, at the same speed: their envs are not stepped, only reset, so that the speeds drawn
+        stay those of an uninterrupted run."""
+
+        def __init__(self, venv: Any, recorder: RunRecorder, space: GridSpace, env_key: str) -> None:
+            super().__init__(venv)
+            self.recorder, self.space, self.env_key = recorder, space, env_key
+            self.workers = _Workers(venv)
+            self._actions: NDArray[np.float32] | None = None
+            self._observations: list[Any] = []
+            self._speeds: list[float | None] = []
+
+        def reset(self) -> Any:
+            observations = self.venv.reset()
+            self._observations = list(observations)
+            self._speeds = [self._speed(info) for info in self.venv.reset_infos]
+            return observations
+
+        def step_async(self, actions: NDArray[np.float32]) -> None:
+            self._actions = np.asarray(actions)
+
+        def step_wait(self) -> Any:
+            assert self._actions is not None
+            base = self.recorder.next_index
+            xs = [self.space.from_action(a) for a in self._actions]
+            keys = [self.space.design_key(x) for x in xs]
+            served = [
+                self._served(base + i, x, key, i) for i, (x, key) in enumerate(zip(xs, keys, strict=True))
+            ]
+            answers = self.workers.run(
+                [a if s is None else None for a, s in zip(self._actions, served, strict=True)]
+            )
+            rewards, infos = np.zeros(self.num_envs, dtype=np.float32), []
+            for i, (x, key, stored, answer) in enumerate(zip(xs, keys, served, answers, strict=True)):
+                observation, reward, info, reset_info = answer
+                if stored is None:
+                    record = _record(base + i, x, reward, info, 0.0, self._speeds[i])
+                    self.recorder.persist(record, key, reward=reward)
+                else:
+                    record, reward, persist = stored
+                    info = {"feasible": record.feasible, "reason": record.reason, "served": True}
+                    if persist:
+                        self.recorder.persist(record, key, reward=reward)
+                self.recorder.append(record)
+                rewards[i] = reward
+                info.update({"terminal_observation": self._observations[i], "TimeLimit.truncated": False})
+                infos.append(info)
+                self._observations[i], self._speeds[i] = observation, self._speed(reset_info)
+            return np.stack(self._observations), rewards, np.ones(self.num_envs, dtype=bool), infos
+
+        def _speed(self, reset_info: dict[str, Any]) -> float | None:
+            return _scalar(reset_info.get("speed_kmh"), self.recorder.config.speed_kmh)
+
+        def _served(
+            self, index: int, x: NDArray[np.float64], key: tuple[int, ...], env: int
+        ) -> tuple[EvaluationRecord, float, bool] | None:
+            """(record, reward, to persist) of a step the store holds: this run's (replayed) or another RL
+            run's on the same env (charged, not simulated); None: simulate it."""
             stored = self.recorder.stored(index, key)
             if stored is not None:
-                self.recorder.append(stored.record)
-                info = {"feasible": stored.record.feasible, "reason": stored.record.reason, "replayed": True}
                 reward = float(stored.reward if stored.reward is not None else -stored.record.loss)
-                return self._observation, reward, True, False, info
-            config = self.recorder.config
-            hit = None  # an env that reports no speed breaks its contract: env.step and _record say so
-            if self._speed is not None:
+                return stored.record, reward, False
+            speed, config = self._speeds[env], self.recorder.config
+            hit = None  # an env that reports no speed breaks its contract: _record says so
+            if speed is not None:
                 hit = self.recorder.store.lookup_env(
-                    config.problem, key, self._speed, config.fidelity, self.env_key
+                    config.problem, key, speed, config.fidelity, self.env_key
                 )
-            if hit is not None:  # an RL run on this env made this step: the same reward, not simulated again
-                outcome, reward = hit
-                record = EvaluationRecord(
-                    index, tuple(float(v) for v in x), outcome.feasible, outcome.sigma, outcome.reason,
-                    0.0, True, True, self._speed,
-                )  # fmt: skip
-                self.recorder.persist(record, key, reward=reward)
-                self.recorder.append(record)
-                info = {"feasible": outcome.feasible, "reason": outcome.reason, "cached": True}
-                return self._observation, reward, True, False, info
-            start = time.perf_counter()
-            observation, env_reward, terminated, truncated, info = self.env.step(action)
-            record = _record(index, x, float(env_reward), info, time.perf_counter() - start, self._speed)
-            self.recorder.persist(record, key, reward=float(env_reward))
-            self.recorder.append(record)
-            return observation, env_reward, terminated, truncated, info
+            if hit is None:
+                return None
+            outcome, reward = hit
+            record = EvaluationRecord(
+                index, tuple(float(v) for v in x), outcome.feasible, outcome.sigma, outcome.reason, 0.0,
+                True, True, speed,
+            )  # fmt: skip
+            return record, float(reward), True
 
-    return RecordingWrapper
+    return RecordingVecEnv
 
 
 def _scalar(value: Any, default: float | None) -> float | None:
@@ -323,13 +493,13 @@ def train_design_policy(
     budget: int,
     seed: int = 0,
     *,
-    options: PPOOptions | None = None,
+    options: LearnerOptions | None = None,
     store: RunStore | str | os.PathLike[str] | None = None,
     resume: bool = False,
     start_if_none: bool = True,
     quiet: bool = True,
 ) -> tuple[DesignPolicy, OptimizationResult]:
-    """Train a PPO design policy for exactly ``budget`` env steps (simulations).
+    """Train a design policy (PPO or SAC, as ``options`` say) for exactly ``budget`` env steps (simulations).
 
     Parameters
     ----------
@@ -338,11 +508,11 @@ def train_design_policy(
     problem : GridProblem
         The problem of the env: its bounds and grid map actions to designs, its name goes in the store.
     budget : int
-        Env steps = simulations = PPO's ``total_timesteps``.
+        Env steps = simulations = the learner's ``total_timesteps``; a multiple of ``options.n_envs``.
     seed : int
-        Seeds PPO (torch, numpy) and the env.
-    options : PPOOptions, optional
-        Hyper-parameters.
+        Seeds the learner (torch, numpy) and the envs (env i: ``seed + i``).
+    options : PPOOptions or SACOptions, optional
+        The learner and its hyper-parameters; default ``PPOOptions()``.
     store : RunStore or path, optional
         Run store; default in memory.
     resume : bool
@@ -359,14 +529,23 @@ def train_design_policy(
         The policy, and the run's record (``best_x``: the best design met in training, at its speed).
     """
     sb3 = import_stable_baselines3()
-    if budget < 1:
-        raise ValueError(f"budget = {budget}: must be at least 1 simulation")
     settings = PPOOptions() if options is None else options
+    name = learner_name(settings)
+    if settings.n_envs < 1:
+        raise ValueError(f"n_envs = {settings.n_envs}: must be at least 1 env")
+    if budget < 1 or budget % settings.n_envs:
+        raise ValueError(
+            f"budget = {budget}: must be at least 1 simulation and a multiple of the {settings.n_envs} envs "
+            "stepped at once"
+        )
     space = GridSpace.from_problem(problem)
-    run_options = {"env": dataclasses.asdict(env_spec), "ppo": dataclasses.asdict(settings)}
+    learner_options = dataclasses.asdict(settings)
+    if settings.n_envs == 1:  # a run on one env keeps the identity it had before vector envs
+        del learner_options["n_envs"]
+    run_options = {"env": env_spec.as_dict(), name: learner_options}
     speed = None if env_spec.speed_range is not None else env_spec.speed_kmh
     config = RunConfig(
-        "ppo", space.store_key, int(budget), int(seed), speed, env_spec.fidelity,
+        name, space.store_key, int(budget), int(seed), speed, env_spec.fidelity,
         json.dumps(run_options, sort_keys=True), package_version(),
     )  # fmt: skip
     with ExitStack() as stack:
@@ -374,35 +553,86 @@ def train_design_policy(
             store if isinstance(store, RunStore) else stack.enter_context(RunStore(store or ":memory:"))
         )
         run_id, resumed = open_run(run_store, config, resume, start_if_none)
-        progress = ProgressDisplay(f"ppo on {space.name}", int(budget), "simulations", quiet=quiet)
+        progress = ProgressDisplay(f"{name} on {space.name}", int(budget), "simulations", quiet=quiet)
         recorder = RunRecorder(run_store, run_id, config, space, "env", progress, resumed)
         vec_env = _vector_env(env_spec, recorder, space, settings)
         stack.callback(vec_env.close)
-        # One torch thread: a 64 x 64 network gains nothing from more, and a fixed thread count keeps
+        # One torch thread: these small networks gain nothing from more, and a fixed thread count keeps
         # torch's sums in one order whatever the core count, so that a resumed run replays its steps.
         import torch
 
         stack.callback(torch.set_num_threads, torch.get_num_threads())
         torch.set_num_threads(1)
-        model = sb3.PPO(
-            "MlpPolicy", vec_env, learning_rate=settings.learning_rate, n_steps=settings.n_steps,
-            batch_size=settings.batch_size, n_epochs=settings.n_epochs, ent_coef=settings.ent_coef,
-            policy_kwargs={"net_arch": list(settings.net_arch), "log_std_init": settings.log_std_init},
-            seed=int(seed), device=settings.device, verbose=0,
-        )  # fmt: skip
-        model.learn(total_timesteps=int(budget), callback=_budget_callback(recorder, int(budget)))
+        if isinstance(settings, SACOptions):
+            model = _sac(sb3, vec_env, settings, seed)
+            model.learn(total_timesteps=int(budget))
+        else:
+            model = sb3.PPO(
+                "MlpPolicy", vec_env, learning_rate=settings.learning_rate, n_steps=settings.n_steps,
+                batch_size=settings.batch_size, n_epochs=settings.n_epochs, ent_coef=settings.ent_coef,
+                policy_kwargs={"net_arch": list(settings.net_arch), "log_std_init": settings.log_std_init},
+                seed=int(seed), device=settings.device, verbose=0,
+            )  # fmt: skip
+            model.learn(total_timesteps=int(budget), callback=_budget_callback(recorder, int(budget)))
         result = recorder.result("budget")
         scaling = _observation_scaling(vec_env) if settings.normalize_observation else None
     return DesignPolicy(model, env_spec, scaling), result
 
 
-def _vector_env(env_spec: EnvSpec, recorder: RunRecorder, space: GridSpace, settings: PPOOptions) -> Any:
-    """One recorded env in SB3's vector interface, standardised as the options ask."""
-    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+def _sac(sb3: Any, vec_env: Any, settings: SACOptions, seed: int) -> Any:
+    """A SAC model that starts at action 0 with the spread ``settings.start_spread`` (:class:`SACOptions`)."""
+    import torch
 
-    wrapper = _recording_wrapper_class()
-    env_key = json.dumps(dataclasses.asdict(env_spec), sort_keys=True)
-    vec_env = DummyVecEnv([lambda: wrapper(env_spec.make(), recorder, space, env_key)])
+    spread = float(settings.start_spread)
+
+    class CentredSAC(sb3.SAC):  # type: ignore[misc,name-defined]
+        """SAC whose warm-up actions are drawn around action 0 (the reference design), not over the box."""
+
+        def _sample_action(self, learning_starts: int, action_noise: Any = None, n_envs: int = 1) -> Any:
+            if self.num_timesteps >= learning_starts:
+                return super()._sample_action(learning_starts, action_noise, n_envs)
+            shape = (n_envs, *self.action_space.shape)
+            action = np.clip(self.action_space.np_random.normal(0.0, spread, shape), -1.0, 1.0)
+            return action.astype(np.float32), action.astype(np.float32)
+
+    model = CentredSAC(
+        "MlpPolicy", vec_env, learning_rate=settings.learning_rate, buffer_size=settings.buffer_size,
+        learning_starts=settings.learning_starts, batch_size=settings.batch_size, tau=settings.tau,
+        gamma=0.0, train_freq=1, gradient_steps=-1, ent_coef=settings.ent_coef,
+        policy_kwargs={"net_arch": list(settings.net_arch)}, seed=int(seed), device=settings.device,
+        verbose=0,
+    )  # fmt: skip
+    with torch.no_grad():
+        for layer in (model.actor.mu, model.actor.log_std):
+            layer.weight.zero_()
+        model.actor.mu.bias.zero_()
+        model.actor.log_std.bias.fill_(math.log(spread))
+    return model
+
+
+def _worker_env(env_spec: EnvSpec) -> Any:
+    """The env of one worker process of a vector env: one BLAS thread and one torch thread, so that the
+    workers share the cores without oversubscribing them (docs/performance.md, 'Threads')."""
+    import torch
+
+    from catenary_env.blas_threads import limit_process
+
+    limit_process()
+    torch.set_num_threads(1)
+    return env_spec.make()
+
+
+def _vector_env(env_spec: EnvSpec, recorder: RunRecorder, space: GridSpace, settings: LearnerOptions) -> Any:
+    """The recorded envs in SB3's vector interface (one in this process, or ``n_envs`` worker processes),
+    standardised as the options ask."""
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNormalize
+
+    env_key = json.dumps(env_spec.as_dict(), sort_keys=True)
+    if settings.n_envs == 1:
+        inner = DummyVecEnv([env_spec.make])
+    else:
+        inner = SubprocVecEnv([functools.partial(_worker_env, env_spec)] * settings.n_envs)
+    vec_env = _recording_vec_env_class()(inner, recorder, space, env_key)
     if not (settings.normalize_observation or settings.normalize_reward):
         return vec_env
     # gamma = 0: an episode is one step, its return is its reward.
@@ -465,14 +695,16 @@ def design_for_speed(policy: DesignPolicy, problem: GridProblem, speed_kmh: floa
 
 POLICY_MEMBER = "catenary_env_policy.json"
 """The member of a saved policy's zip archive that describes it (stable-baselines3 ignores it)."""
-POLICY_FORMAT = 1
+POLICY_FORMAT = 2
+"""Format of the record; format 1 (PPO only: no ``learner``, no ``excluded_speeds``) is read too."""
 
 MODEL_MEMBERS = frozenset(
     {"data", "policy.pth", "policy.optimizer.pth", "pytorch_variables.pth", "_stable_baselines3_version",
-     "system_info.txt"}
+     "system_info.txt", "actor.optimizer.pth", "critic.optimizer.pth", "ent_coef_optimizer.pth"}
 )  # fmt: skip
-"""The members of a PPO model saved by stable-baselines3 (``BaseAlgorithm.save``); ``data`` (JSON, whose
-``:serialized:`` entries are pickled) and ``policy.pth`` (the weights) are always there."""
+"""The members of a PPO or SAC model saved by stable-baselines3 (``BaseAlgorithm.save``; SAC's optimisers are
+saved one per network); ``data`` (JSON, whose ``:serialized:`` entries are pickled) and ``policy.pth`` (the
+weights) are always there."""
 
 
 class PolicyFileError(CatenaryError, ValueError):
@@ -488,13 +720,15 @@ class PolicyRecord:
     ----------
     problem : str
         The problem's name (``"B1"``).
+    learner : str
+        ``"ppo"`` or ``"sac"`` (:data:`LEARNERS`).
     variable_names : tuple of str
         The variables of the designs it proposes.
     model_fingerprint : str
         The fingerprint of the problem's model when trained (an edited preset or a new simulator revision
         changes it).
     env_spec : EnvSpec
-        The env trained on: its speed, or its speed range, and fidelity.
+        The env trained on: its speed, or its speed range and held-out speed bands, and fidelity.
     budget, seed : int
         The training run's simulations and seed.
     run_id : int or None
@@ -507,9 +741,12 @@ class PolicyRecord:
         The speed ``best_x`` was simulated at, km/h.
     package_version : str
         The version of the package that trained it.
+    command : str
+        The command that reproduces the training run ("" when not given).
     """
 
     problem: str
+    learner: str
     variable_names: tuple[str, ...]
     model_fingerprint: str
     env_spec: EnvSpec
@@ -520,14 +757,24 @@ class PolicyRecord:
     best_sigma: float | None
     best_speed_kmh: float | None
     package_version: str
+    command: str = ""
 
     @property
     def speeds(self) -> str:
         """The speeds trained on, in words."""
         spec = self.env_spec
-        if spec.speed_range is not None:
-            return f"{spec.speed_range[0]:g}-{spec.speed_range[1]:g} km/h"
-        return f"{spec.speed_kmh:g} km/h"
+        if spec.speed_range is None:
+            return f"{spec.speed_kmh:g} km/h"
+        held_out = "".join(f" except {a:g}-{b:g}" for a, b in spec.excluded_speeds)
+        return f"{spec.speed_range[0]:g}-{spec.speed_range[1]:g} km/h{held_out}"
+
+
+def learner_name_of_model(model: Any) -> str:
+    """The :data:`LEARNERS` name of a stable-baselines3 model (of its class or the class it derives from)."""
+    for kind in type(model).__mro__:
+        if kind.__name__.lower() in LEARNERS:
+            return kind.__name__.lower()
+    raise ValueError(f"a {type(model).__name__} model is none of the learners {', '.join(LEARNERS)}")
 
 
 def save_policy(
@@ -535,6 +782,7 @@ def save_policy(
     path: str | os.PathLike[str],
     problem: GridProblem,
     result: OptimizationResult | None = None,
+    command: str = "",
 ) -> Path:
     """Save a trained policy as one file: stable-baselines3's zip with :data:`POLICY_MEMBER` inside.
 
@@ -550,6 +798,8 @@ def save_policy(
         Its problem (name, variables, model fingerprint).
     result : OptimizationResult, optional
         The training run's record (budget, seed, run, best design met).
+    command : str
+        The command that reproduces the training run, kept in the record.
 
     Returns
     -------
@@ -560,9 +810,10 @@ def save_policy(
     record = {
         "format": POLICY_FORMAT,
         "problem": problem.name,
+        "learner": learner_name_of_model(policy.model),
         "variable_names": list(problem.variable_names),
         "model_fingerprint": str(getattr(problem, "model_fingerprint", "")),
-        "env_spec": dataclasses.asdict(policy.env_spec),
+        "env_spec": policy.env_spec.as_dict(),
         "observation_scaling": None
         if policy.observation_scaling is None
         else {
@@ -578,6 +829,7 @@ def save_policy(
         "best_sigma": None if result is None else result.best_sigma,
         "best_speed_kmh": None if result is None else result.best_speed_kmh,
         "package_version": package_version(),
+        "command": command,
         "units": {"best_x": "m", "best_sigma": "N", "best_speed_kmh": "km/h", "env_spec.speed_kmh": "km/h"},
     }
     handle, temporary = tempfile.mkstemp(suffix=".zip", prefix=f".{target.name}-", dir=target.parent)
@@ -605,16 +857,16 @@ def load_policy(path: str | os.PathLike[str]) -> tuple[DesignPolicy, PolicyRecor
     ------
     PolicyFileError
         Not a policy file (missing, a folder, not a zip, no :data:`POLICY_MEMBER`, other members than a saved
-        PPO model's), or a damaged one: the message names the file and what is wrong.
+        PPO or SAC model's), or a damaged one: the message names the file and what is wrong.
     """
     source = Path(path)
     record, scaling = check_policy_file(source)
     sb3 = import_stable_baselines3()
     try:
-        model = sb3.PPO.load(source, device="cpu")
+        model = getattr(sb3, record.learner.upper()).load(source, device="cpu")
     except Exception as error:  # whatever torch or pickle raise on a damaged archive
         raise PolicyFileError(
-            f"{source}: the PPO model inside cannot be loaded ({type(error).__name__}: {error})"
+            f"{source}: the {record.learner} model inside cannot be loaded ({type(error).__name__}: {error})"
         ) from error
     return DesignPolicy(model, record.env_spec, scaling), record
 
@@ -667,16 +919,19 @@ def _policy_record(source: Path, text: bytes) -> tuple[PolicyRecord, Observation
     """The record of a policy file and its observation scaling; ValueError naming the field that is wrong."""
     try:
         data = json.loads(text)
-        if not isinstance(data, dict) or data.get("format") != POLICY_FORMAT:
-            raise ValueError(
-                f"format: {data.get('format') if isinstance(data, dict) else data!r} is not {POLICY_FORMAT}"
-            )
+        if not isinstance(data, dict) or data.get("format") not in (1, POLICY_FORMAT):
+            found = data.get("format") if isinstance(data, dict) else data
+            raise ValueError(f"format: {found!r} is not 1 or {POLICY_FORMAT}")
+        learner = str(data.get("learner", "ppo"))
+        if learner not in LEARNERS:
+            raise ValueError(f"learner: {learner!r} is not one of {', '.join(LEARNERS)}")
         spec = data["env_spec"]
         env_spec = EnvSpec(
             str(spec["env_id"]),
             None if spec["speed_kmh"] is None else float(spec["speed_kmh"]),
             None if spec["speed_range"] is None else tuple(float(v) for v in spec["speed_range"]),
             str(spec["fidelity"]),
+            tuple((float(a), float(b)) for a, b in spec.get("excluded_speeds", ())),
         )
         raw = data["observation_scaling"]
         scaling = None if raw is None else ObservationScaling(
@@ -686,6 +941,7 @@ def _policy_record(source: Path, text: bytes) -> tuple[PolicyRecord, Observation
         best_x = data.get("best_x")
         record = PolicyRecord(
             problem=str(data["problem"]),
+            learner=learner,
             variable_names=tuple(str(v) for v in data["variable_names"]),
             model_fingerprint=str(data["model_fingerprint"]),
             env_spec=env_spec,
@@ -696,6 +952,7 @@ def _policy_record(source: Path, text: bytes) -> tuple[PolicyRecord, Observation
             best_sigma=data.get("best_sigma"),
             best_speed_kmh=data.get("best_speed_kmh"),
             package_version=str(data.get("package_version", "")),
+            command=str(data.get("command", "")),
         )
     except (ValueError, KeyError, TypeError) as error:
         raise PolicyFileError(

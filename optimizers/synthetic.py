@@ -30,7 +30,17 @@ from catenary_env.problems.grid import DesignGrid
 
 from .problem import Outcome, SimulateFunction
 
-__all__ = ["SYNTHETIC_PROBLEMS", "QuadraticProblem", "get_synthetic_problem", "simulate_quadratic"]
+__all__ = [
+    "CENTRE_SPEED_KMH",
+    "SYNTHETIC_PROBLEMS",
+    "QuadraticProblem",
+    "get_synthetic_problem",
+    "simulate_quadratic",
+]
+
+
+CENTRE_SPEED_KMH = 260.0
+"""The speed at which a speed-dependent synthetic problem's minimiser is ``centre``, km/h."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,6 +72,9 @@ class QuadraticProblem:
         Right-hand side of the constraint, m.
     delay : float
         Seconds each evaluation sleeps, to stand in for an expensive simulation (0 for none).
+    shift_per_kmh : ndarray, shape (n,), or None
+        How the minimiser moves with the speed, m per km/h from :data:`CENTRE_SPEED_KMH` (None: it does
+        not), as a catenary's optimum does: the test bed of speed-conditioned policies.
     """
 
     name: str
@@ -76,19 +89,26 @@ class QuadraticProblem:
     constraint: NDArray[np.float64]
     limit: float
     delay: float = 0.0
+    shift_per_kmh: NDArray[np.float64] | None = None
 
     @property
     def simulate(self) -> SimulateFunction:
         return functools.partial(simulate_quadratic, self)
 
-    def sigma(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
-        """σ of designs ``x`` (shape (..., n)), N, feasible or not."""
-        terms = self.weights * ((np.asarray(x) - self.centre) / self.scale) ** 2
+    def sigma(self, x: NDArray[np.float64], speed_kmh: float = CENTRE_SPEED_KMH) -> NDArray[np.float64]:
+        """σ of designs ``x`` (shape (..., n)) at a speed (km/h), N, feasible or not."""
+        terms = self.weights * ((np.asarray(x) - self.centre_at(speed_kmh)) / self.scale) ** 2
         return np.asarray(self.base_sigma + np.sum(terms, axis=-1), dtype=np.float64)
 
     def feasible(self, x: NDArray[np.float64]) -> NDArray[np.bool_]:
         """Whether designs ``x`` (shape (..., n)) meet the constraint (1e-12 m of rounding allowed)."""
         return np.asarray(x) @ self.constraint <= self.limit + 1e-12
+
+    def centre_at(self, speed_kmh: float) -> NDArray[np.float64]:
+        """The unconstrained minimiser at a speed (km/h), m."""
+        if self.shift_per_kmh is None:
+            return self.centre
+        return self.centre + self.shift_per_kmh * (float(speed_kmh) - CENTRE_SPEED_KMH)
 
     @property
     def n_variables(self) -> int:
@@ -98,15 +118,16 @@ class QuadraticProblem:
         """The design the studies compare against, m: every variable 0 (the level wire, as B1's)."""
         return np.zeros(self.n_variables)
 
-    def grid_optimum(self) -> tuple[NDArray[np.float64], float]:
-        """The best feasible design on the grid and its σ, by enumeration (small grids only)."""
+    def grid_optimum(self, speed_kmh: float = CENTRE_SPEED_KMH) -> tuple[NDArray[np.float64], float]:
+        """The best feasible design on the grid and its σ at a speed (km/h), by enumeration (small grids
+        only)."""
         grid = DesignGrid(self.name, self.variable_names, self.lower, self.upper, self.step)
         levels = grid.n_levels
         if np.prod(levels) > 5_000_000:
             raise ValueError(f"{self.name}: grid of {int(np.prod(levels))} points is too large to enumerate")
         k = np.array(list(itertools.product(*(range(n) for n in levels))))
         x = grid.from_index(k)
-        sigma = np.where(self.feasible(x), self.sigma(x), np.inf)
+        sigma = np.where(self.feasible(x), self.sigma(x, speed_kmh), np.inf)
         best = int(np.argmin(sigma))
         return x[best], float(sigma[best])
 
@@ -122,10 +143,10 @@ def simulate_quadratic(
     if not problem.feasible(values):
         reason = f"synthetic: constraint {problem.constraint.tolist()} @ x > {problem.limit} m"
         return Outcome(False, None, reason, time.perf_counter() - start)
-    return Outcome(True, float(problem.sigma(values)), "", time.perf_counter() - start)
+    return Outcome(True, float(problem.sigma(values, speed_kmh)), "", time.perf_counter() - start)
 
 
-def _quadratic(name: str, delay: float) -> QuadraticProblem:
+def _quadratic(name: str, delay: float, shift_per_kmh: NDArray[np.float64] | None = None) -> QuadraticProblem:
     n = 3
     return QuadraticProblem(
         name=name,
@@ -140,6 +161,7 @@ def _quadratic(name: str, delay: float) -> QuadraticProblem:
         constraint=np.array([1.0, 0.0, 1.0]),
         limit=0.012,  # cuts off the unconstrained minimiser: the optimum lies on the constraint
         delay=delay,
+        shift_per_kmh=shift_per_kmh,
     )
 
 
@@ -147,6 +169,8 @@ SYNTHETIC_PROBLEMS: dict[str, QuadraticProblem] = {
     "synthetic-quadratic": _quadratic("synthetic-quadratic", 0.0),
     # The same problem at 5 ms an evaluation: long enough to interrupt a run in the middle.
     "synthetic-quadratic-slow": _quadratic("synthetic-quadratic-slow", 0.005),
+    # Its minimiser moves 0.1 mm per km/h (6 mm from 260 to 200 or 320 km/h): speed-conditioned policies.
+    "synthetic-speed-quadratic": _quadratic("synthetic-speed-quadratic", 0.0, np.array([1e-4, -1e-4, 0.0])),
 }
 """The synthetic problems by name; the optimisers' command line accepts these names too."""
 

@@ -355,6 +355,32 @@ def test_speed_range_draws_a_new_speed_each_reset_and_options_set_it(fake_simula
     assert info["speed_kmh"] == 275.0 and fake_simulator.calls[-1][1] == pytest.approx(275.0 / 3.6)
 
 
+def test_excluded_speed_bands_are_never_drawn_but_can_be_set(fake_simulator: FakeSimulator) -> None:
+    bands = ((225.0, 235.0), (285.0, 295.0))
+    env = make("Catenary-B1-v0", speed_range=(200.0, 320.0), excluded_speeds=bands)
+    env.reset(seed=5)
+    speeds = {env.reset()[1]["speed_kmh"] for _ in range(400)}
+    assert speeds <= set(range(200, 225)) | set(range(236, 285)) | set(range(296, 321))
+    assert min(speeds) < 225 and 236 <= max(s for s in speeds if s < 285) and max(speeds) > 295
+    assert env.reset(options={"speed_kmh": 230.0})[1]["speed_kmh"] == 230.0  # held out, not forbidden
+
+
+@pytest.mark.parametrize(
+    ("bands", "match"),
+    [
+        (((190.0, 210.0),), r"within speed_range"),
+        (((240.0, 230.0),), r"a <= b"),
+        (((220.0, 240.0), (235.0, 250.0)), "overlap"),
+        (((200.0, 320.0),), "no whole km/h speed"),
+    ],
+)
+def test_excluded_speed_bands_that_make_no_sense_are_refused(bands, match) -> None:
+    with pytest.raises(ValueError, match=match):
+        CatenaryDesignEnv("B1", speed_range=(200.0, 320.0), excluded_speeds=bands, **FAST)
+    with pytest.raises(ValueError, match="only with speed_range"):
+        CatenaryDesignEnv("B1", speed_kmh=300.0, excluded_speeds=((225.0, 235.0),), **FAST)
+
+
 def test_step_before_reset_with_a_speed_range_is_refused() -> None:
     env = CatenaryDesignEnv("B1", speed_range=(200.0, 300.0), **FAST)
     with pytest.raises(gym.error.ResetNeeded):

@@ -18,6 +18,7 @@ from optimizers.rl import (  # noqa: E402
     BOX_WIDE_SPREAD,
     EnvSpec,
     PPOOptions,
+    SACOptions,
     design_for_speed,
     train_design_policy,
 )
@@ -250,3 +251,112 @@ def test_a_speed_range_env_that_does_not_report_its_speed_is_refused(tmp_path):
     spec = EnvSpec(env_id, speed_kmh=None, speed_range=(200.0, 300.0), fidelity="test")
     with pytest.raises(ValueError, match="the env reports no speed"):
         train_design_policy(spec, PROBLEM, budget=8, seed=0, options=SMALL, store=tmp_path / "runs.sqlite")
+
+
+# -- SAC, and vector envs over worker processes ------------------------------------------------------------
+
+SMALL_SAC = SACOptions(learning_starts=32, batch_size=32, net_arch=(32, 32))
+
+
+def test_sac_spends_exactly_the_budget_starts_at_action_0_and_is_reproducible():
+    _, first = train_design_policy(SINGLE_SPEED, PROBLEM, budget=80, seed=1, options=SMALL_SAC)
+    _, second = train_design_policy(SINGLE_SPEED, PROBLEM, budget=80, seed=1, options=SMALL_SAC)
+    assert first.optimizer == "sac" and len(first.history) == first.n_simulations == 80
+    assert _comparable(first.history) == _comparable(second.history)
+    # The warm-up draws around action 0 (the reference design, dh = 0) with the spread 0.2 (4 mm), not over
+    # the box (±20 mm), and the actor's first proposals after it have about the same spread.
+    warm_up = np.array([r.x for r in first.history[:32]])
+    after = np.array([r.x for r in first.history[32:48]])
+    assert 2e-3 < np.sqrt(np.mean(warm_up**2)) < 6e-3
+    assert np.sqrt(np.mean(after**2)) < 8e-3
+
+
+def test_sac_resumes_an_interrupted_training(tmp_path):
+    store = tmp_path / "runs.sqlite"
+    policy, full = train_design_policy(
+        SPEED_RANGE, PROBLEM, budget=72, seed=2, options=SMALL_SAC, store=store
+    )
+    with sqlite3.connect(store) as connection:  # as if killed after 50 steps, past the warm-up
+        connection.execute("DELETE FROM evaluations WHERE idx >= 50")
+    resumed_policy, resumed = train_design_policy(
+        SPEED_RANGE, PROBLEM, budget=72, seed=2, options=SMALL_SAC, store=store, resume=True
+    )
+    assert resumed.run_id == full.run_id and resumed.optimizer == "sac"
+    assert _comparable(resumed.history) == _comparable(full.history)
+    for speed in (210.0, 290.0):
+        assert np.array_equal(
+            design_for_speed(policy, PROBLEM, speed), design_for_speed(resumed_policy, PROBLEM, speed)
+        )
+
+
+@pytest.mark.parametrize(
+    "learner",  # 10 s each, mostly the workers' start: PPO's share of the machinery is tested above
+    [pytest.param(PPOOptions(n_steps=8, batch_size=8, n_epochs=2), marks=pytest.mark.slow), SMALL_SAC],
+)
+def test_vector_envs_in_worker_processes_record_every_step_and_resume(tmp_path, learner):
+    """Two envs in worker processes (SubprocVecEnv): every step reaches the store in order, the speeds are
+    drawn per env, and a run killed in the middle of a vector step resumes to the same run, the workers
+    being reset, not stepped, for the stored steps."""
+    from optimizers.synthetic_env import ENV_ID as SYNTHETIC_ENV
+    from optimizers.synthetic_env import PROBLEM as SYNTHETIC
+
+    spec = EnvSpec(SYNTHETIC_ENV, speed_kmh=None, speed_range=(200.0, 320.0), fidelity="test")
+    options = dataclasses.replace(learner, n_envs=2)
+    store = tmp_path / "runs.sqlite"
+    _, full = train_design_policy(spec, SYNTHETIC, budget=48, seed=3, options=options, store=store)
+    assert [r.index for r in full.history] == list(range(48)) and full.n_simulations == 48
+    assert len({r.speed_kmh for r in full.history}) > 20  # both workers draw their own speeds
+    _, in_process = train_design_policy(
+        spec, SYNTHETIC, budget=48, seed=3, options=dataclasses.replace(learner, n_envs=1)
+    )
+    assert [r.x for r in in_process.history] != [r.x for r in full.history]  # another run: two envs
+    with sqlite3.connect(store) as connection:
+        connection.execute("DELETE FROM evaluations WHERE idx >= 37")  # half of the 19th vector step
+    _, resumed = train_design_policy(
+        spec, SYNTHETIC, budget=48, seed=3, options=options, store=store, resume=True
+    )
+    assert _comparable(resumed.history) == _comparable(full.history)
+    with pytest.raises(ValueError, match="multiple of the 2 envs"):
+        train_design_policy(spec, SYNTHETIC, budget=47, seed=3, options=options)
+
+
+@pytest.mark.slow  # 40 s of SAC training on the synthetic problem: the default options' tuning check
+def test_sac_with_its_defaults_learns_the_design_per_speed_at_held_out_speeds_too():
+    from optimizers.synthetic_env import ENV_ID as SYNTHETIC_ENV
+    from optimizers.synthetic_env import PROBLEM as SYNTHETIC
+
+    bands = ((225.0, 235.0), (285.0, 295.0))
+    spec = EnvSpec(
+        SYNTHETIC_ENV, speed_kmh=None, speed_range=(200.0, 320.0), fidelity="test", excluded_speeds=bands
+    )
+    policy, result = train_design_policy(spec, SYNTHETIC, budget=2000, seed=0, options=SACOptions())
+    assert not any(a <= r.speed_kmh <= b for r in result.history for a, b in bands)
+    for speed in (210.0, 230.0, 260.0, 290.0, 320.0):  # 230 and 290 km/h never trained on
+        x = design_for_speed(policy, SYNTHETIC, speed)
+        outcome = SYNTHETIC.simulate(tuple(x), speed, "test")
+        assert outcome.feasible and outcome.sigma < 1.05 * SYNTHETIC.grid_optimum(speed)[1], speed
+
+
+def test_a_run_on_one_env_without_held_out_speeds_keeps_its_identity_from_before(tmp_path):
+    """Runs made before vector envs and held-out speeds existed (PPO on one env) must still be found in a
+    store, to resume them and share their steps: neither ``n_envs`` nor ``excluded_speeds`` is part of the
+    identity of such a run."""
+    import json
+
+    from optimizers.store import RunStore
+
+    store = tmp_path / "runs.sqlite"
+    train_design_policy(SPEED_RANGE, PROBLEM, budget=8, seed=0, options=SMALL, store=store)
+    with RunStore(store) as runs:
+        (run,) = runs.runs()
+    options = json.loads(str(run["options"]))
+    assert options["env"] == {
+        "env_id": ENV_ID,
+        "speed_kmh": None,
+        "speed_range": [200.0, 300.0],
+        "fidelity": "test",
+    }
+    assert set(options["ppo"]) == {
+        "learning_rate", "n_steps", "batch_size", "n_epochs", "ent_coef", "net_arch", "log_std_init",
+        "normalize_observation", "normalize_reward", "device",
+    }  # fmt: skip

@@ -167,3 +167,54 @@ def test_catenary_optimize_saves_the_policy_and_propose_reads_it(tmp_path, monke
     mine = tmp_path / "mine.zip"
     assert main([*argv, "--speed", "280", "--save-policy", str(mine), "--store", ":memory:"]) == 0
     assert f"policy saved to {mine}" in capsys.readouterr().out and mine.is_file()
+
+
+def test_a_sac_policy_with_held_out_speeds_is_saved_with_its_record_and_command(
+    tmp_path, monkeypatch, capsys
+):
+    monkeypatch.setenv(CACHE_ENV, str(tmp_path / "cache"))
+    monkeypatch.chdir(tmp_path)
+    argv = ["optimize", "B1", "--optimizer", "sac", "--budget", "2", "--fidelity", "test", "--quiet"]
+    bands = ["--speed-range", "200", "320", "--held-out-speeds", "225", "235", "285", "295"]
+    assert main([*argv, *bands, "--json"]) == 0
+    policy = tmp_path / json.loads(capsys.readouterr().out)["policy"]
+    assert policy.name == "catenary-runs.sac-B1-run1.zip"
+    loaded, record = load_policy(policy)
+    assert type(loaded.model).__name__ == "SAC" and record.learner == "sac"
+    assert record.env_spec.excluded_speeds == ((225.0, 235.0), (285.0, 295.0))
+    assert record.speeds == "200-320 km/h except 225-235 except 285-295"
+    assert record.model_fingerprint == catenary_problem("B1").model_fingerprint
+    assert record.command.startswith("catenary optimize B1 --optimizer sac --budget 2 --seed 0")
+    assert "--held-out-speeds 225 235 285 295" in record.command and policy.name in record.command
+
+    assert main(["propose", str(policy), "--speed", "230", "--no-evaluate"]) == 0
+    captured = capsys.readouterr()
+    assert "sac policy for B1" in captured.out and f"reproduce: {record.command}" in captured.out
+    assert "230 km/h is outside the policy's training speeds" in captured.err
+
+
+@pytest.mark.parametrize(
+    ("options", "says"),
+    [
+        (["--held-out-speeds", "225", "235"], "with --speed-range"),
+        (["--speed-range", "200", "320", "--held-out-speeds", "225"], "pairs of km/h"),
+        (["--speed-range", "200", "320", "--held-out-speeds", "190", "235"], "within speed_range"),
+        (["--speed-range", "200", "320", "--workers", "2"], "multiple"),
+    ],
+)
+def test_bad_rl_options_end_in_one_line(tmp_path, capsys, options, says):
+    argv = [
+        "optimize",
+        "B1",
+        "--optimizer",
+        "sac",
+        "--budget",
+        "3",
+        "--fidelity",
+        "test",
+        "--store",
+        ":memory:",
+    ]
+    assert main([*argv, *options]) == 2
+    err = capsys.readouterr().err.strip()
+    assert says in err and "\n" not in err

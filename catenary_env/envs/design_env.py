@@ -94,7 +94,8 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     Nothing is random but the speed: with `speed_range=(lo, hi)` it is drawn at `reset` from
     `self.np_random`, uniformly on the whole km/h values in `[lo, hi]` (a 1 km/h grid, so that the
-    pantograph calibration of each speed is reused). `reset(options={"speed_kmh": v})` sets it.
+    pantograph calibration of each speed is reused) outside the `excluded_speeds` bands.
+    `reset(options={"speed_kmh": v})` sets it, in an excluded band too (to evaluate a policy there).
 
     ## Episode End
 
@@ -126,6 +127,9 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     - `speed_range=None`: `(lo, hi)` km/h to draw the speed from at each reset. A speed (or range) above
       0.9 of the wave speed is warned about, as on the command line: the wave-speed singularity dominates
       the contact force there.
+    - `excluded_speeds=()`: with `speed_range`, bands `((a, b), ...)` km/h, each within the range and
+      apart from the others, whose speeds (a and b included) are never drawn: speeds held out of
+      training. Refused if no whole km/h speed is left to draw.
     - `n_spans=None`: spans in the section, overriding the fidelity's (the analysis section shrinks to
       `n_spans - 2` spans if needed).
     - `fidelity="study"`: `"study"` (20 spans, statistics on 10, Δt = 1 ms), `"test"` (5 spans, coarse
@@ -160,6 +164,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         problem: str,
         speed_kmh: float | None = None,
         speed_range: tuple[float, float] | None = None,
+        excluded_speeds: tuple[tuple[float, float], ...] = (),
         n_spans: int | None = None,
         fidelity: str | Fidelity = "study",
         objective: str = "sigma",
@@ -185,6 +190,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._speeds, self._speed_range = _speed_setting(
             self.problem.catenary_definition, speed_kmh, speed_range, objective, speeds_kmh
         )
+        self._speed_choices = _drawn_speeds(self._speed_range, excluded_speeds)
         self._wave_speed_kmh = self.problem.catenary_definition.wave_speed * 3.6
         n = self.problem.n_variables
         self.action_space = spaces.Box(-1.0, 1.0, (n,), np.float32)
@@ -208,9 +214,9 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             speed = float(options["speed_kmh"])
             _check_speed(self.problem.catenary_definition, speed)
             self._speeds = (speed,)
-        elif self._speed_range is not None:
-            lo, hi = math.ceil(self._speed_range[0]), math.floor(self._speed_range[1])
-            self._speeds = (float(self.np_random.integers(lo, hi, endpoint=True)),)
+        elif self._speed_choices is not None:
+            draw = self.np_random.integers(len(self._speed_choices))
+            self._speeds = (float(self._speed_choices[draw]),)
         self._reset_done = True
         return self._observation(), {"speed_kmh": self._speed_info()}
 
@@ -387,6 +393,39 @@ def _speed_setting(
     for v in checked:
         _check_speed(catenary, v)
     return speeds, bounds
+
+
+def _drawn_speeds(
+    speed_range: tuple[float, float] | None, excluded: tuple[tuple[float, float], ...]
+) -> NDArray[np.float64] | None:
+    """The whole km/h speeds ``reset`` draws from: those of the range outside the excluded bands (None
+    without a range); ValueError naming ``excluded_speeds`` for a band that is reversed, reaches outside
+    the range or overlaps another, or bands that leave no speed."""
+    bands = [(float(a), float(b)) for a, b in excluded]
+    if speed_range is None:
+        if bands:
+            raise ValueError(f"excluded_speeds = {excluded!r}: only with speed_range, the speeds drawn from")
+        return None
+    lo, hi = speed_range
+    for a, b in bands:
+        if not (lo <= a <= b <= hi):
+            raise ValueError(
+                f"excluded_speeds: band ({a:g}, {b:g}) km/h must have a <= b within speed_range "
+                f"({lo:g}, {hi:g}) km/h"
+            )
+    for (a, b), (c, d) in zip(sorted(bands), sorted(bands)[1:], strict=False):
+        if c <= b:
+            raise ValueError(f"excluded_speeds: bands ({a:g}, {b:g}) and ({c:g}, {d:g}) km/h overlap")
+    speeds = np.arange(math.ceil(lo), math.floor(hi) + 1, dtype=np.float64)
+    held_out = np.zeros(speeds.shape, dtype=bool)
+    for a, b in bands:
+        held_out |= (speeds >= a) & (speeds <= b)
+    kept = speeds[~held_out]
+    if kept.size == 0:
+        raise ValueError(
+            f"excluded_speeds = {excluded!r}: no whole km/h speed of ({lo:g}, {hi:g}) km/h is left to draw"
+        )
+    return kept
 
 
 def _check_speed(catenary: CatenaryDefinition, speed_kmh: float) -> None:

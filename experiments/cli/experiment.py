@@ -34,6 +34,9 @@ STUDIES = {
         "optimizer_comparison", "seven optimisers on B1 and SW1 at equal budgets, with IOHprofiler output"
     ),
     "rl": Study("rl_studies", "PPO learning curves, a speed-conditioned policy, a design for 200-320 km/h"),
+    "rl-amortised": Study(
+        "rl_amortised", "speed-conditioned PPO and SAC policies at held-out speeds against a GA run per speed"
+    ),
 }
 
 

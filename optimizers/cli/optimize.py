@@ -2,15 +2,16 @@
 
     catenary optimize PROBLEM --optimizer NAME --budget N [--seed S] [--speed KMH] [--fidelity study|test]
                       [--store PATH] [--resume] [--workers N] [--scheduler tcp://HOST:PORT] [--json]
-                      [--speed-range LO HI] [--save-policy FILE]
+                      [--speed-range LO HI] [--held-out-speeds A B [A B ...]] [--save-policy FILE]
 
 ``optimize`` is also available as ``python -m optimizers PROBLEM ...``. :func:`add_parser` adds the
 sub-command to the ``catenary`` parser and :func:`run` executes it; bad input is refused with one line
 (``catenary_env/cli/exits.py``).
 
-A ppo run saves its trained policy: with ``--save-policy FILE`` there, else beside the run store, as
-``<store>.ppo-<problem>-run<ID>.zip`` (a run store ``:memory:`` keeps none unless ``--save-policy`` is
-given); the summary says where.
+A ppo or sac run (an RL design policy) saves its trained policy: with ``--save-policy FILE`` there, else
+beside the run store, as ``<store>.<learner>-<problem>-run<ID>.zip`` (a run store ``:memory:`` keeps none
+unless ``--save-policy`` is given), with the command that reproduces it in its record; the summary says
+where. Its ``--workers`` are the envs stepped at once, each in its process (default 1: in this process).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shlex
 import sys
 from pathlib import Path
 from typing import Any
@@ -35,13 +37,14 @@ __all__ = ["DEFAULT_STORE", "DESCRIPTION", "add_arguments", "add_parser", "run"]
 DEFAULT_STORE = "catenary-runs.sqlite"
 """Run store used when ``--store`` is not given (in the current directory)."""
 
-RL_OPTIMIZERS = ("ppo",)
+RL_OPTIMIZERS = ("ppo", "sac")
+"""The RL learners (``optimizers.rl.LEARNERS``), trained on a design env rather than asked and told."""
 
 DESCRIPTION = (
     "Optimise the design of a catenary problem (docs/problems.md) with the study's genetic algorithm, a "
-    "nevergrad optimiser or a PPO design policy. Every evaluation is committed to an SQLite run store as it "
-    "completes: an interrupted run continues with --resume, and a design already simulated in the store is "
-    "not simulated again."
+    "nevergrad optimiser or an RL design policy (PPO or SAC). Every evaluation is committed to an SQLite "
+    "run store as it completes: an interrupted run continues with --resume, and a design already simulated "
+    "in the store is not simulated again."
 )
 
 
@@ -85,15 +88,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         nargs=2,
         default=None,
         metavar=("LO", "HI"),
-        help="ppo only: train a speed-conditioned policy over speeds LO..HI km/h, drawn per episode "
-        "(the best sigma is then the lowest met over speeds, reported with its speed)",
+        help="ppo and sac only: train a speed-conditioned policy over speeds LO..HI km/h, drawn per "
+        "episode (the best sigma is then the lowest met over speeds, reported with its speed)",
+    )
+    parser.add_argument(
+        "--held-out-speeds",
+        type=float,
+        nargs="+",
+        default=[],
+        metavar="KMH",
+        help="with --speed-range: pairs A B of km/h bounding bands of speeds never drawn in training (held "
+        "out, to evaluate the policy there), e.g. 225 235 285 295",
     )
     parser.add_argument(
         "--save-policy",
         default=None,
         metavar="FILE",
-        help="ppo only: save the trained policy to FILE, a zip that 'catenary propose' reads (default: "
-        "beside the run store, <store>.ppo-<problem>-run<ID>.zip; none for --store :memory:)",
+        help="ppo and sac only: save the trained policy to FILE, a zip that 'catenary propose' reads "
+        "(default: beside the run store, <store>.<learner>-<problem>-run<ID>.zip; none for --store :memory:)",
     )
     parser.add_argument(
         "--fidelity",
@@ -127,7 +139,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="N",
         help="local worker processes for the simulations; 1 simulates in this process "
-        f"(default: the number of CPUs, {os.cpu_count() or 1})",
+        f"(default: the number of CPUs, {os.cpu_count() or 1}; ppo and sac: the envs stepped at once, "
+        "default 1, and the budget a multiple of them)",
     )
     parser.add_argument(
         "--scheduler",
@@ -178,7 +191,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--progress-every {args.progress_every}: must be a number of seconds >= 0")
     if args.save_policy is not None:
         if args.optimizer not in RL_OPTIMIZERS:
-            raise UsageError(f"--save-policy is for --optimizer ppo, not {args.optimizer}")
+            raise UsageError(f"--save-policy is for --optimizer ppo or sac, not {args.optimizer}")
         check_output_path(args.save_policy, "--save-policy")
     try:
         if args.optimizer in RL_OPTIMIZERS:
@@ -216,7 +229,9 @@ def _run_optimizer(args: argparse.Namespace) -> OptimizationResult:
     from ..runner import optimize
 
     if args.speed_range is not None:
-        raise UsageError("--speed-range is for --optimizer ppo; the other optimisers design for one --speed")
+        raise UsageError(
+            "--speed-range is for --optimizer ppo or sac; the other optimisers design for one --speed"
+        )
     if args.scheduler and args.workers is not None:
         raise UsageError(
             f"--workers {args.workers} with --scheduler {args.scheduler}: the cluster's workers run the "
@@ -232,34 +247,74 @@ def _run_optimizer(args: argparse.Namespace) -> OptimizationResult:
 
 
 def _run_rl(args: argparse.Namespace) -> tuple[OptimizationResult, Path | None]:
-    from ..catenary_adapter import catenary_problem
-    from ..rl import EnvSpec, save_policy, train_design_policy
+    import dataclasses
 
-    if args.scheduler or (args.workers or 1) > 1:
-        print(
-            "catenary optimize: note: ppo steps its env in this process; --workers/--scheduler are ignored",
-            file=sys.stderr,
-        )
+    from ..catenary_adapter import catenary_problem
+    from ..rl import LEARNERS, save_policy, train_design_policy
+
+    if args.scheduler:
+        raise UsageError(f"--scheduler is not for --optimizer {args.optimizer}: its envs run on this machine")
     try:
         from catenary_env.envs import register_envs
     except ImportError as error:
         raise MissingDependency(
-            f"ppo needs the design envs: pip install catenary-env[gym] ({error})"
+            f"{args.optimizer} needs the design envs: pip install catenary-env[gym] ({error})"
         ) from error
     register_envs()
     problem = catenary_problem(args.problem)
-    speed_range = tuple(args.speed_range) if args.speed_range is not None else None
-    spec = EnvSpec(
-        f"Catenary-{problem.name}-v0", None if speed_range else args.speed, speed_range, args.fidelity
-    )
+    spec = rl_env_spec(problem.name, args)
+    n_envs = args.workers or 1
+    if n_envs < 1 or args.budget % n_envs:
+        raise UsageError(
+            f"--workers {n_envs} with --budget {args.budget}: the budget must be a multiple of it"
+        )
+    options = dataclasses.replace(LEARNERS[args.optimizer](), n_envs=n_envs)
     policy, result = train_design_policy(
-        spec, problem, args.budget, args.seed, store=args.store, resume=args.resume or args.resume_or_start,
-        start_if_none=args.resume_or_start, quiet=args.quiet,
+        spec, problem, args.budget, args.seed, options=options, store=args.store,
+        resume=args.resume or args.resume_or_start, start_if_none=args.resume_or_start, quiet=args.quiet,
     )  # fmt: skip
     path = args.save_policy
     if path is None and args.store != ":memory:":
-        path = f"{Path(args.store).with_suffix('')}.ppo-{problem.name}-run{result.run_id}.zip"
-    return result, None if path is None else save_policy(policy, path, problem, result)
+        path = f"{Path(args.store).with_suffix('')}.{args.optimizer}-{problem.name}-run{result.run_id}.zip"
+    if path is None:
+        return result, None
+    return result, save_policy(policy, path, problem, result, rl_command(args, path))
+
+
+def rl_env_spec(problem: str, args: argparse.Namespace) -> Any:
+    """The env of an RL run from its options (``--speed`` or ``--speed-range``, ``--held-out-speeds``)."""
+    from ..rl import EnvSpec
+
+    bands = list(args.held_out_speeds)
+    if bands and (args.speed_range is None or len(bands) % 2):
+        raise UsageError(
+            f"--held-out-speeds {' '.join(f'{v:g}' for v in bands)}: pairs of km/h A B, with --speed-range"
+        )
+    pairs = tuple((bands[i], bands[i + 1]) for i in range(0, len(bands), 2))
+    speed_range = tuple(args.speed_range) if args.speed_range is not None else None
+    env_id = f"Catenary-{problem}-v0"
+    try:
+        spec = EnvSpec(env_id, None if speed_range else args.speed, speed_range, args.fidelity, pairs)
+        spec.make().close()  # refuses bad speeds and bands, naming them, before any training
+    except ValueError as error:
+        raise UsageError(f"--speed-range/--held-out-speeds: {error}") from None
+    return spec
+
+
+def rl_command(args: argparse.Namespace, policy: str | os.PathLike[str]) -> str:
+    """The ``catenary optimize`` command that reproduces (resumes) an RL run and saves its policy again."""
+    words = [
+        "catenary", "optimize", args.problem, "--optimizer", args.optimizer, "--budget", str(args.budget),
+        "--seed", str(args.seed), "--fidelity", args.fidelity, "--workers", str(args.workers or 1),
+    ]  # fmt: skip
+    if args.speed_range is not None:
+        words += ["--speed-range", *(f"{v:g}" for v in args.speed_range)]
+        if args.held_out_speeds:
+            words += ["--held-out-speeds", *(f"{v:g}" for v in args.held_out_speeds)]
+    else:
+        words += ["--speed", f"{args.speed:g}"]
+    words += ["--store", str(args.store), "--resume-or-start", "--save-policy", str(policy)]
+    return shlex.join(words)
 
 
 def _summary(result: OptimizationResult, store: str, policy: Path | None = None) -> str:

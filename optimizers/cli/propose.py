@@ -1,8 +1,8 @@
-"""``catenary propose POLICY --speed KMH``: the designs of a saved PPO design policy, and their σ.
+"""``catenary propose POLICY --speed KMH``: the designs of a saved design policy (PPO or SAC), and their σ.
 
     catenary propose POLICY --speed KMH [KMH ...] [--no-evaluate] [--fidelity study|test] [--json]
 
-A policy file is a zip archive written by ``catenary optimize PROBLEM --optimizer ppo``: the
+A policy file is a zip archive written by ``catenary optimize PROBLEM --optimizer ppo`` (or ``sac``): the
 stable-baselines3 model (``data``, ``policy.pth``, ...) and the project's record, ``catenary_env_policy.json``
 (docs/problems.md, 'Policy files'). Loading the model unpickles parts of it, as stable-baselines3 does: a
 policy file from someone else can run code on this machine. Load only policy files you made or trust. A file
@@ -25,19 +25,19 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``propose`` to the sub-commands of the ``catenary`` command."""
     parser: argparse.ArgumentParser = subparsers.add_parser(
         "propose",
-        help="the design a saved PPO policy proposes at a speed, and its sigma",
-        description="Load a PPO design policy saved by 'catenary optimize PROBLEM --optimizer ppo' and print "
-        "the design it proposes at each speed; unless --no-evaluate, simulate each design at its speed, "
-        "with the problem's reference design (the level contact wire) for comparison. Security: loading a "
-        "policy unpickles parts of it, as stable-baselines3 does, so a policy file from someone else can run "
-        "code on this machine; load only policy files you made or trust. A file that is not a policy file "
-        "(not a zip archive, no catenary_env_policy.json record, other members than a saved PPO model's) is "
-        "refused before stable-baselines3 reads it.",
+        help="the design a saved design policy proposes at a speed, and its sigma",
+        description="Load a design policy saved by 'catenary optimize PROBLEM --optimizer ppo' (or sac) and "
+        "print the design it proposes at each speed; unless --no-evaluate, simulate each design at its "
+        "speed, with the problem's reference design (the level contact wire) for comparison. Security: "
+        "loading a policy unpickles parts of it, as stable-baselines3 does, so a policy file from someone "
+        "else can run code on this machine; load only policy files you made or trust. A file that is not a "
+        "policy file (not a zip archive, no catenary_env_policy.json record, other members than a saved PPO "
+        "or SAC model's) is refused before stable-baselines3 reads it.",
     )
     parser.add_argument(
         "policy",
         metavar="POLICY",
-        help="the policy file: a zip saved by catenary optimize --optimizer ppo (only one you trust)",
+        help="the policy file: a zip saved by catenary optimize --optimizer ppo or sac (only one you trust)",
     )
     parser.add_argument(
         "--speed",
@@ -93,7 +93,7 @@ def _proposals(args: argparse.Namespace) -> dict[str, Any]:
         if not _trained_for(record, speed):
             print(
                 f"catenary propose: warning: {speed:g} km/h is outside the policy's training speeds "
-                f"({record.speeds}): its design there is an extrapolation",
+                f"({record.speeds}): its design there is an extrapolation or an interpolation",
                 file=sys.stderr,
             )
     fidelity = args.fidelity or record.env_spec.fidelity
@@ -116,6 +116,7 @@ def _proposals(args: argparse.Namespace) -> dict[str, Any]:
     return {
         "policy": str(args.policy),
         "record": policy_record,
+        "speeds": record.speeds,
         "fidelity": None if args.no_evaluate else fidelity,
         "proposals": proposals,
         "units": {"speed_kmh": "km/h", "design": "m", "sigma, reference_sigma": "N"},
@@ -142,7 +143,8 @@ def _reference_sigma(name: str, speed: float, fidelity: str) -> float | None:
 def _trained_for(record: Any, speed: float) -> bool:
     spec = record.env_spec
     if spec.speed_range is not None:
-        return spec.speed_range[0] <= speed <= spec.speed_range[1]
+        held_out = any(a <= speed <= b for a, b in spec.excluded_speeds)
+        return spec.speed_range[0] <= speed <= spec.speed_range[1] and not held_out
     return spec.speed_kmh is None or abs(speed - spec.speed_kmh) < 1e-9
 
 
@@ -160,15 +162,13 @@ def _warn_if_stale(path: str, record: Any, problem: Any) -> None:
 def _proposal_table(report: dict[str, Any]) -> str:
     record = report["record"]
     spec = record["env_spec"]
-    trained = (
-        f"{spec['speed_range'][0]:g}-{spec['speed_range'][1]:g} km/h"
-        if spec["speed_range"] is not None
-        else f"{spec['speed_kmh']:g} km/h"
-    )
     lines = [
-        f"{report['policy']}: ppo policy for {record['problem']}, trained on {trained} ({spec['fidelity']} "
-        f"fidelity, budget {record['budget']}, seed {record['seed']}, run {record['run_id']})"
+        f"{report['policy']}: {record['learner']} policy for {record['problem']}, trained on "
+        f"{report['speeds']} ({spec['fidelity']} fidelity, budget {record['budget']}, seed {record['seed']}, "
+        f"run {record['run_id']})"
     ]
+    if record["command"]:
+        lines.append(f"reproduce: {record['command']}")
     for entry in report["proposals"]:
         lines.append(f"at {entry['speed_kmh']:g} km/h:")
         lines.extend(f"  {name} = {value:.3f} m" for name, value in entry["design"].items())

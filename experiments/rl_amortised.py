@@ -1,0 +1,700 @@
+"""Study 5b: speed-conditioned design policies as amortised optimisers (docs/problems.md, 'Experiments').
+
+A policy conditioned on the speed is an amortised optimiser: trained once, it gives a design for any speed
+with no further simulation, where an optimiser pays its whole budget again for each speed. The study
+measures what that costs and what it gives, on B1 and SW1 (quick: B1):
+
+1. *Learning curves*: speed-conditioned policies trained on speeds drawn from 200–320 km/h outside the
+   held-out bands (:data:`HELD_OUT`, 225–235 and 285–295 km/h), with PPO and SAC
+   (:mod:`optimizers.rl`), 3 seeds: the mean reward (−σ, or −Fm for an infeasible design) and the
+   feasible share over a window of steps, against env steps (one step, one simulation).
+2. *The table*: at held-out speeds (:data:`HELD_OUT_SPEEDS`) and training speeds
+   (:data:`TRAINING_SPEEDS`), σ of the reference design, of the GA optimum at that speed (a GA run of
+   :attr:`Config.ga_budget` simulations per speed) and of each policy's design, and the gap policy / GA.
+3. *The amortisation ledger* (:func:`amortisation_ledger`, :func:`break_even`): for N speeds, the
+   simulations one policy cost (its training, plus one simulation per speed to know the σ of its design)
+   against those of N GA runs, and the σ each gets; the break-even N at which the policy is the cheaper,
+   for the gap to the GA optimum one accepts.
+
+Where the policies start: at the reference design (action 0) with the spread
+:data:`optimizers.rl.POLICY_SPREAD`, as in study 5 (:mod:`experiments.rl_studies`); SAC's warm-up draws
+its actions around action 0 with the same spread (:class:`optimizers.rl.SACOptions`). Hyper-parameters:
+the learners' defaults (:class:`optimizers.rl.PPOOptions`, :class:`optimizers.rl.SACOptions`), chosen once,
+with ``n_envs`` = ``--envs``; so each full run is also the ``catenary optimize`` command written beside its
+saved policy.
+
+Every run goes to the run store (``out/runs.sqlite`` by default, shared by the studies) and is resumed from
+it: a killed study started again replays what it stored (a policy is re-trained by replaying its stored
+steps, which gives the same policy) and simulates only the rest.
+
+Outputs (``out/rl/amortised/``): ``steps.csv`` (every training step), ``ga_runs.csv``, ``ga_curves.csv``
+(the GA's best σ after each simulation), ``designs.csv`` (every design simulated at each speed),
+``ledger.csv``; ``amortised.md`` (tables), ``learning_curves.png``, ``ledger.png``; ``policies/`` (each
+policy, loadable with ``catenary propose``, and beside it ``<policy>.txt``, the command that reproduces
+its run).
+
+Settings. Full: the study fidelity, B1 and SW1, PPO and SAC, 3 seeds of 10,000 steps on 2 envs, GA runs of
+1000 simulations (the published study's populations) at 210, 230, 260, 290 and 320 km/h. Quick: the "test"
+fidelity, B1, one seed of 8 steps, GA runs of 12 simulations at 230 and 260 km/h (a smoke test, not a
+result). ``--problems synthetic-speed-quadratic`` runs the whole study in seconds on a synthetic problem
+(``optimizers/synthetic.py``) whose optimum moves with the speed.
+
+    python -m experiments.rl_amortised [--full] [--envs 2] [--workers 2] [--out results]
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+import shlex
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from optimizers.base import OptimizationResult
+from optimizers.ga import POPULATION_SIZES, GAOptions
+from optimizers.problem_registry import resolve_problem
+from optimizers.rl import (
+    LEARNERS,
+    EnvSpec,
+    LearnerOptions,
+    design_for_speed,
+    save_policy,
+    train_design_policy,
+)
+from optimizers.runner import optimize
+from optimizers.store import RunStore
+from optimizers.synthetic import SYNTHETIC_PROBLEMS
+
+from .common import (
+    DEFAULT_OUT,
+    STORE,
+    add_full_option,
+    add_out_option,
+    add_store_option,
+    add_workers_option,
+    markdown_table,
+    read_csv,
+    run_cli,
+    run_study,
+    study_dir,
+    worker_count,
+    write_csv,
+)
+from .design_evaluations import evaluate_designs, study_problem
+from .model_stamp import catenaries_of, stamp_study
+
+NAME = "rl/amortised"
+SPEED_RANGE = (200.0, 320.0)
+HELD_OUT = ((225.0, 235.0), (285.0, 295.0))
+"""Speed bands never drawn in training, km/h."""
+HELD_OUT_SPEEDS = (230.0, 290.0)
+TRAINING_SPEEDS = (210.0, 260.0, 320.0)
+LEDGER_SPEEDS = (1, 2, 5, 10, 20, 50, 100)
+"""The numbers of speeds N of the ledger's rows."""
+CHOICES = sorted({*POPULATION_SIZES, "synthetic-speed-quadratic"})
+
+
+@dataclass(frozen=True)
+class Config:
+    """The study's settings (quick unless ``full``).
+
+    Attributes
+    ----------
+    full : bool
+        The study fidelity and the issue's budgets (hours); else quick.
+    out : Path
+        The results folder; the study writes into ``out/rl/amortised``.
+    workers : int
+        Local worker processes for the GA's and the given designs' simulations.
+    envs : int
+        Envs a policy trains on at once, each in its worker process (1: in this process).
+    store : Path or None
+        The run store; default ``out/runs.sqlite``, shared by the studies.
+    problems : tuple of str
+        The design problems; default B1 and SW1 (quick: B1).
+    learners : tuple of str
+        Of :data:`optimizers.rl.LEARNERS`.
+    seeds : tuple of int
+        Seeds of each learner; default 0, 1, 2 (quick: 0).
+    """
+
+    full: bool = False
+    out: Path = DEFAULT_OUT
+    workers: int = 2
+    envs: int = 2
+    store: Path | None = None
+    problems: tuple[str, ...] = ()
+    learners: tuple[str, ...] = tuple(LEARNERS)
+    seeds: tuple[int, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not self.problems:
+            object.__setattr__(self, "problems", ("B1", "SW1") if self.full else ("B1",))
+        if not self.seeds:
+            object.__setattr__(self, "seeds", (0, 1, 2) if self.full else (0,))
+
+    @property
+    def fidelity(self) -> str:
+        return "study" if self.full else "test"
+
+    @property
+    def policy_budget(self) -> int:
+        """Env steps (simulations) of each policy: a multiple of the envs."""
+        steps = 10_000 if self.full else 8
+        return int(math.ceil(steps / self.envs) * self.envs)
+
+    def learner_options(self, learner: str) -> LearnerOptions:
+        """The learner's defaults on :attr:`envs` envs (quick: updates after a few steps)."""
+        options = dataclasses.replace(LEARNERS[learner](), n_envs=self.envs)
+        if self.full:
+            return options
+        if learner == "ppo":
+            return dataclasses.replace(options, n_steps=2, batch_size=2 * self.envs)
+        return dataclasses.replace(options, learning_starts=4, batch_size=4)
+
+    @property
+    def ga_budget(self) -> int:
+        """Simulations of each single-speed GA run."""
+        return 1000 if self.full else 12
+
+    def ga_options(self, problem: str) -> GAOptions:
+        return GAOptions(population_size=POPULATION_SIZES.get(problem, 20) if self.full else 6)
+
+    @property
+    def speeds(self) -> tuple[tuple[float, bool], ...]:
+        """(speed in km/h, held out) of the table, in order of speed."""
+        training, held_out = (TRAINING_SPEEDS, HELD_OUT_SPEEDS) if self.full else ((260.0,), (230.0,))
+        return tuple(sorted([(v, False) for v in training] + [(v, True) for v in held_out]))
+
+
+def env_id(problem: str) -> str:
+    """The design env of a problem: the catenary envs', or the synthetic one's."""
+    if problem in SYNTHETIC_PROBLEMS:
+        from optimizers.synthetic_env import ENV_ID
+
+        return ENV_ID
+    return f"Catenary-{problem}-v0"
+
+
+def check_starts_at_reference(problem: str) -> None:
+    """Refuse a problem whose reference design is not action 0, the untrained policies' mean."""
+    grid = resolve_problem(problem)
+    reference = study_problem(problem).reference_x()
+    action = None if reference is None else 2.0 * (reference - grid.lower) / (grid.upper - grid.lower) - 1.0
+    if action is None or not np.allclose(action, 0.0, atol=1e-9):
+        raise ValueError(
+            f"problem = {problem!r}: its bounds are not centred on its reference design, so a policy "
+            "starting at action 0 would not start at the reference; use B1 or SW1"
+        )
+
+
+def main(config: Config) -> Path:
+    folder = study_dir(config.out, NAME)
+    (folder / "policies").mkdir(exist_ok=True)
+    tables: dict[str, list[dict[str, Any]]] = {k: [] for k in ("steps", "ga", "curves", "designs")}
+    store_path = config.store or Path(config.out) / STORE
+    with RunStore(store_path) as store:
+        for problem in config.problems:
+            check_starts_at_reference(problem)
+            _reference_designs(store, config, problem, tables["designs"])
+            _ga_runs(store, config, problem, tables)
+            for learner in config.learners:
+                for seed in config.seeds:
+                    _policy(store, store_path, config, problem, learner, seed, folder, tables)
+    for name, key in (("steps", "steps"), ("ga_runs", "ga"), ("ga_curves", "curves"), ("designs", "designs")):
+        if tables[key]:  # no GA curve when no GA run met a feasible design
+            write_csv(folder / f"{name}.csv", tables[key])
+    stamp_study(folder, catenaries_of(config.problems))
+    report(folder)
+    return folder
+
+
+def _x_text(x: Any) -> str:
+    return " ".join(f"{v:.6g}" for v in x)
+
+
+def _sigma(sigma: float | None, feasible: bool) -> float:
+    return float(sigma) if feasible and sigma is not None else float("nan")
+
+
+def _simulate(
+    store: RunStore,
+    config: Config,
+    problem: str,
+    designs: list[tuple[str, int, float, tuple[float, ...]]],
+    rows: list[dict[str, Any]],
+) -> None:
+    """Simulate (or find in the store) each (design, seed, speed, x) and add its row."""
+    outcomes = evaluate_designs(
+        store, problem, [(x, v) for *_, v, x in designs], config.fidelity, config.workers
+    )
+    held_out = dict(config.speeds)
+    for (design, seed, speed, x), outcome in zip(designs, outcomes, strict=True):
+        rows.append(
+            {
+                "problem": problem, "design": design, "seed": seed, "speed_kmh": speed,
+                "held_out": int(held_out.get(speed, False)), "feasible": int(outcome.feasible),
+                "sigma_N": _sigma(outcome.sigma, outcome.feasible), "x_m": _x_text(x),
+            }
+        )  # fmt: skip
+
+
+def _reference_designs(store: RunStore, config: Config, problem: str, rows: list[dict[str, Any]]) -> None:
+    reference = tuple(float(v) for v in study_problem(problem).reference_x())  # type: ignore[union-attr]
+    _simulate(store, config, problem, [("reference", -1, v, reference) for v, _ in config.speeds], rows)
+
+
+def _ga_runs(store: RunStore, config: Config, problem: str, tables: dict[str, list[dict[str, Any]]]) -> None:
+    """A GA run at each speed of the table: its result, its best σ after each simulation, its optimum."""
+    optima = []
+    for speed, _ in config.speeds:
+        result = optimize(
+            problem, "ga", config.ga_budget, 0, speed_kmh=speed, fidelity=config.fidelity,
+            options=config.ga_options(problem), store=store, resume=True, start_if_none=True,
+            n_workers=config.workers, quiet=not config.full,
+        )  # fmt: skip
+        tables["ga"].append(
+            {
+                "problem": problem, "speed_kmh": speed, "budget": result.budget,
+                "population": config.ga_options(problem).population_size,
+                "n_simulations": result.n_simulations, "stop_reason": result.stop_reason,
+                "best_sigma_N": result.best_sigma if result.best_sigma is not None else float("nan"),
+                "x_m": _x_text(result.best_x) if result.best_x is not None else "",
+            }
+        )  # fmt: skip
+        tables["curves"].extend(_best_so_far(problem, speed, result))
+        if result.best_x is not None:
+            optima.append(("ga", 0, speed, tuple(result.best_x)))
+    _simulate(store, config, problem, optima, tables["designs"])
+
+
+def _best_so_far(problem: str, speed: float, result: OptimizationResult) -> list[dict[str, Any]]:
+    """The GA's best σ after each simulation that improved it (the curve is a staircase)."""
+    rows, best, simulations = [], math.inf, 0
+    for record in result.history:
+        simulations += int(record.charged)
+        if record.feasible and record.sigma is not None and record.sigma < best:
+            best = record.sigma
+            rows.append(
+                {"problem": problem, "speed_kmh": speed, "simulations": simulations, "best_sigma_N": best}
+            )
+    return rows
+
+
+def _policy(
+    store: RunStore,
+    store_path: Path,
+    config: Config,
+    problem: str,
+    learner: str,
+    seed: int,
+    folder: Path,
+    tables: dict[str, list[dict[str, Any]]],
+) -> None:
+    """Train (or resume) one policy, save it with the command that reproduces it, and simulate its designs."""
+    from catenary_env.envs import register_envs
+
+    register_envs()
+    spec = EnvSpec(env_id(problem), None, SPEED_RANGE, config.fidelity, HELD_OUT)
+    options = config.learner_options(learner)
+    design_problem = resolve_problem(problem)
+    policy, result = train_design_policy(
+        spec, design_problem, config.policy_budget, seed, options=options, store=store, resume=True,
+        start_if_none=True, quiet=not config.full,
+    )  # fmt: skip
+    stored = store.evaluations(int(result.run_id or 0))
+    tables["steps"].extend(
+        {
+            "learner": learner, "problem": problem, "seed": seed, "step": record.index + 1,
+            "speed_kmh": record.speed_kmh, "feasible": int(record.feasible),
+            "sigma_N": _sigma(record.sigma, record.feasible),
+            "reward": stored[record.index].reward if record.index in stored else float("nan"),
+            "x_m": _x_text(record.x),
+        }
+        for record in result.history
+    )  # fmt: skip
+    path = folder / "policies" / f"{learner}-{problem}-seed{seed}.zip"
+    command = reproduce_command(config, store_path, problem, learner, seed, path)
+    save_policy(policy, path, design_problem, result, command)
+    path.with_suffix(".txt").write_text(command + "\n", encoding="utf-8")
+    designs = [
+        (learner, seed, v, tuple(design_for_speed(policy, design_problem, v).tolist()))
+        for v, _ in config.speeds
+    ]
+    _simulate(store, config, problem, designs, tables["designs"])
+    best = "no feasible design" if result.best_sigma is None else f"best σ met {result.best_sigma:.3f} N"
+    print(f"{learner} on {problem} seed {seed}: {best}", file=sys.stderr, flush=True)
+
+
+def reproduce_command(
+    config: Config, store: Path, problem: str, learner: str, seed: int, policy: Path
+) -> str:
+    """The command that reproduces (resumes from the store) one policy's run and saves it again: ``catenary
+    optimize`` when the study trains with the learner's defaults (the full setting), else the study's own
+    command restricted to that run."""
+    if config.learner_options(learner) == dataclasses.replace(LEARNERS[learner](), n_envs=config.envs):
+        bands = [f"{v:g}" for band in HELD_OUT for v in band]
+        words = [
+            "catenary", "optimize", problem, "--optimizer", learner, "--budget", str(config.policy_budget),
+            "--seed", str(seed), "--fidelity", config.fidelity, "--workers", str(config.envs),
+            "--speed-range", *(f"{v:g}" for v in SPEED_RANGE), "--held-out-speeds", *bands,
+            "--store", str(store), "--resume-or-start", "--save-policy", str(policy),
+        ]  # fmt: skip
+    else:
+        words = [
+            "catenary", "experiment", "rl-amortised", *(["--full"] if config.full else []),
+            "--problems", problem, "--learners", learner, "--seeds", str(seed), "--envs", str(config.envs),
+            "--store", str(store), "--out", str(config.out),
+        ]  # fmt: skip
+    return shlex.join(words)
+
+
+# -- the ledger --------------------------------------------------------------------------------------------
+
+
+def ga_simulations_to(curves: list[dict[str, Any]], problem: str, speed: float, sigma: float) -> float:
+    """Simulations the GA run at a speed needed before its best σ was at most ``sigma`` (N); inf if never."""
+    for row in sorted((r for r in curves if r["problem"] == problem and r["speed_kmh"] == speed),
+                      key=lambda r: r["simulations"]):  # fmt: skip
+        if row["best_sigma_N"] <= sigma * (1.0 + 1e-12):
+            return float(row["simulations"])
+    return math.inf
+
+
+def break_even(training: float, ga_per_speed: float) -> float:
+    """The number of speeds from which one policy costs fewer simulations than a GA run per speed.
+
+    The policy costs ``training`` simulations once, plus one per speed (the σ of its design); the GA
+    ``ga_per_speed`` per speed. Break-even: the smallest whole N with N ga_per_speed >= training + N, inf
+    when a GA run costs no more than the policy's one simulation per speed.
+    """
+    if ga_per_speed <= 1.0:
+        return math.inf
+    return float(math.ceil(training / (ga_per_speed - 1.0)))
+
+
+def break_even_by_gap(
+    curves: list[dict[str, Any]],
+    ga_runs: list[dict[str, Any]],
+    problem: str,
+    training: float,
+    gaps_percent: tuple[float, ...] = (0.0, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0),
+) -> list[tuple[float, float, float]]:
+    """For each accepted gap g to the GA optimum (%): the simulations a GA run needed to come within g of
+    its own optimum (mean over the table's speeds), and the break-even number of speeds of a policy of
+    ``training`` simulations that reaches that gap: (g, GA simulations, break-even N)."""
+    runs = [r for r in ga_runs if r["problem"] == problem and math.isfinite(r["best_sigma_N"])]
+    out = []
+    for gap in gaps_percent:
+        needed = [
+            ga_simulations_to(curves, problem, r["speed_kmh"], r["best_sigma_N"] * (1.0 + gap / 100.0))
+            for r in runs
+        ]
+        mean = float(np.mean(needed)) if needed else math.nan
+        out.append((gap, mean, break_even(training, mean)))
+    return out
+
+
+def policy_gaps(designs: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Per problem, learner, seed and speed: σ of the policy's design, of the GA optimum, of the reference,
+    and the gap policy / GA optimum (%; NaN where the policy's design is infeasible)."""
+    by = {(r["problem"], r["design"], r["seed"], r["speed_kmh"]): r for r in designs}
+    rows = []
+    for (problem, design, seed, speed), row in by.items():
+        if design in ("reference", "ga"):
+            continue
+        ga = by.get((problem, "ga", 0, speed), {}).get("sigma_N", math.nan)
+        reference = by.get((problem, "reference", -1, speed), {}).get("sigma_N", math.nan)
+        rows.append(
+            {
+                "problem": problem, "learner": design, "seed": seed, "speed_kmh": speed,
+                "held_out": row["held_out"], "reference_N": reference, "ga_N": ga, "policy_N": row["sigma_N"],
+                "gap_percent": 100.0 * (row["sigma_N"] / ga - 1.0),
+            }
+        )  # fmt: skip
+    return rows
+
+
+def amortisation_ledger(
+    designs: list[dict[str, Any]],
+    curves: list[dict[str, Any]],
+    ga_runs: list[dict[str, Any]],
+    steps: list[dict[str, Any]],
+    n_speeds: tuple[int, ...] = LEDGER_SPEEDS,
+) -> list[dict[str, Any]]:
+    """The amortisation ledger: for each problem, learner and number of speeds N, the simulations of one
+    policy (its training, the mean over seeds, plus one per speed) against those of N GA runs, both at
+    their full budget and stopped as soon as the GA's best σ reaches the policy's (the GA's cost of the
+    policy's quality, mean over the table's speeds), with the mean σ each gets over the table's speeds and
+    the break-even N of both.
+
+    Parameters
+    ----------
+    designs, curves, ga_runs, steps : list of dict
+        The rows of ``designs.csv``, ``ga_curves.csv``, ``ga_runs.csv`` and ``steps.csv``.
+    n_speeds : tuple of int
+        The numbers of speeds of the rows.
+    """
+    gaps = policy_gaps(designs)
+    out = []
+    for (problem, learner), rows in _groups(gaps, "problem", "learner").items():
+        runs = [r for r in ga_runs if r["problem"] == problem]
+        ga_full = float(np.mean([r["n_simulations"] for r in runs]))
+        matched = [ga_simulations_to(curves, problem, r["speed_kmh"], r["policy_N"]) for r in rows]
+        ga_match = float(np.mean([m if math.isfinite(m) else ga_full for m in matched]))
+        per_seed = _groups([s for s in steps if s["problem"] == problem and s["learner"] == learner], "seed")
+        training = float(np.mean([len(v) for v in per_seed.values()]))
+        summary = {
+            "problem": problem, "learner": learner, "training_simulations": training,
+            "policy_sigma_N": float(np.nanmean([r["policy_N"] for r in rows])),
+            "ga_sigma_N": float(np.nanmean([r["ga_N"] for r in rows])),
+            "gap_percent": float(np.nanmean([r["gap_percent"] for r in rows])),
+            "feasible_share": float(np.mean([math.isfinite(r["policy_N"]) for r in rows])),
+            "ga_per_speed": ga_full, "ga_per_speed_to_policy_sigma": ga_match,
+            "break_even_full": break_even(training, ga_full),
+            "break_even_same_sigma": break_even(training, ga_match),
+        }  # fmt: skip
+        for n in n_speeds:
+            out.append(
+                {
+                    **summary, "n_speeds": n, "policy_simulations": training + n,
+                    "ga_simulations": n * ga_full, "ga_simulations_to_policy_sigma": n * ga_match,
+                }
+            )  # fmt: skip
+    return out
+
+
+# -- report (from the data files alone) -------------------------------------------------------------------
+
+LEARNING_COLUMNS = [
+    ("problem", "problem", "s"),
+    ("learner", "learner", "s"),
+    ("seed", "seed", ".0f"),
+    ("steps", "steps", ".0f"),
+    ("first_reward", "mean reward, first window", ".2f"),
+    ("last_reward", "mean reward, last window", ".2f"),
+    ("first_feasible_percent", "feasible, first window (%)", ".0f"),
+    ("last_feasible_percent", "feasible, last window (%)", ".0f"),
+]
+TABLE_COLUMNS = [
+    ("problem", "problem", "s"),
+    ("speed_kmh", "speed (km/h)", "g"),
+    ("held", "held out", "s"),
+    ("learner", "learner", "s"),
+    ("reference_N", "σ reference (N)", ".2f"),
+    ("ga_N", "σ GA optimum (N)", ".2f"),
+    ("policy_N", "σ policy, mean over seeds (N)", ".2f"),
+    ("gap_percent", "gap to GA (%)", "+.1f"),
+    ("feasible", "feasible seeds", "s"),
+]
+LEDGER_COLUMNS = [
+    ("problem", "problem", "s"),
+    ("learner", "learner", "s"),
+    ("training_simulations", "training (simulations)", ".0f"),
+    ("gap_percent", "mean gap to GA (%)", "+.1f"),
+    ("ga_per_speed", "GA run (simulations)", ".0f"),
+    ("ga_per_speed_to_policy_sigma", "GA to the policy's σ (simulations)", ".0f"),
+    ("break_even_full", "break-even N, GA in full", ".0f"),
+    ("break_even_same_sigma", "break-even N, same σ", ".0f"),
+]
+
+
+def report(folder: Path) -> str:
+    """Tables and figures from the CSV files (no simulation)."""
+    steps = read_csv(folder / "steps.csv")
+    designs = read_csv(folder / "designs.csv")
+    curves = read_csv(folder / "ga_curves.csv") if (folder / "ga_curves.csv").is_file() else []
+    ga_runs = read_csv(folder / "ga_runs.csv")
+    window = _window(steps)
+    ledger = amortisation_ledger(designs, curves, ga_runs, steps)
+    write_csv(folder / "ledger.csv", ledger)
+    sections = [
+        (f"Learning curves (windows of {window} steps)", learning_summary(steps, window), LEARNING_COLUMNS),
+        (
+            f"Policies against a GA run per speed ({_ga_budgets(ga_runs)})",
+            speed_table(designs),
+            TABLE_COLUMNS,
+        ),
+        ("Amortisation ledger", [r for r in ledger if r["n_speeds"] == LEDGER_SPEEDS[0]], LEDGER_COLUMNS),
+    ]
+    text = "\n\n".join(f"### {title}\n\n{markdown_table(rows, columns)}" for title, rows, columns in sections)
+    (folder / "amortised.md").write_text(text + "\n", encoding="utf-8")
+    _learning_figure(steps, window, folder / "learning_curves.png")
+    _ledger_figure(ledger, curves, ga_runs, folder / "ledger.png")
+    return text
+
+
+def _ga_budgets(ga_runs: list[dict[str, Any]]) -> str:
+    """The GA runs' budgets and populations, in words."""
+    budgets = sorted({(int(r["budget"]), int(r["population"])) for r in ga_runs})
+    return "; ".join(f"GA: {b} simulations, population {p}" for b, p in budgets)
+
+
+def _groups(rows: list[dict[str, Any]], *keys: str) -> dict[tuple[Any, ...], list[dict[str, Any]]]:
+    out: dict[tuple[Any, ...], list[dict[str, Any]]] = {}
+    for row in rows:
+        out.setdefault(tuple(row[k] for k in keys), []).append(row)
+    return out
+
+
+def _window(steps: list[dict[str, Any]]) -> int:
+    """Steps per point of the curves: a fortieth of the shortest run, at least 4."""
+    lengths = [len(v) for v in _groups(steps, "problem", "learner", "seed").values()]
+    return max(4, min(lengths) // 40) if lengths else 4
+
+
+def learning_summary(steps: list[dict[str, Any]], window: int) -> list[dict[str, Any]]:
+    out = []
+    for (problem, learner, seed), rows in _groups(steps, "problem", "learner", "seed").items():
+        rows.sort(key=lambda r: r["step"])
+        first, last = rows[:window], rows[-window:]
+        out.append(
+            {
+                "problem": problem, "learner": learner, "seed": seed, "steps": len(rows),
+                "first_reward": float(np.mean([r["reward"] for r in first])),
+                "last_reward": float(np.mean([r["reward"] for r in last])),
+                "first_feasible_percent": 100.0 * float(np.mean([r["feasible"] for r in first])),
+                "last_feasible_percent": 100.0 * float(np.mean([r["feasible"] for r in last])),
+            }
+        )  # fmt: skip
+    return out
+
+
+def speed_table(designs: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The table: per problem, speed and learner, σ of the reference, the GA optimum and the policies (mean
+    over the seeds whose design is feasible), and the gap."""
+    out = []
+    for (problem, learner, speed), rows in sorted(
+        _groups(policy_gaps(designs), "problem", "learner", "speed_kmh").items()
+    ):
+        sigmas = [r["policy_N"] for r in rows if math.isfinite(r["policy_N"])]
+        policy = float(np.mean(sigmas)) if sigmas else math.nan
+        out.append(
+            {
+                "problem": problem, "speed_kmh": speed, "held": "yes" if rows[0]["held_out"] else "no",
+                "learner": learner, "reference_N": rows[0]["reference_N"], "ga_N": rows[0]["ga_N"],
+                "policy_N": policy, "gap_percent": 100.0 * (policy / rows[0]["ga_N"] - 1.0),
+                "feasible": f"{len(sigmas)}/{len(rows)}",
+            }
+        )  # fmt: skip
+    return out
+
+
+def _curve(values: list[float], window: int) -> tuple[Any, Any]:
+    smooth = np.convolve(values, np.ones(window) / window, mode="valid")
+    return np.arange(window, len(values) + 1), smooth
+
+
+def _learning_figure(steps: list[dict[str, Any]], window: int, path: Path) -> None:
+    from catenary_env.plots import pyplot
+
+    plt = pyplot()
+    problems = list(dict.fromkeys(s["problem"] for s in steps))
+    fig, axes = plt.subplots(2, len(problems), figsize=(5.5 * len(problems), 7.0), squeeze=False)
+    colours = {"ppo": "tab:blue", "sac": "tab:orange"}
+    for column, problem in enumerate(problems):
+        for (learner, seed), rows in _groups(
+            [s for s in steps if s["problem"] == problem], "learner", "seed"
+        ).items():
+            rows.sort(key=lambda r: r["step"])
+            label = f"{learner}" if seed == min(r["seed"] for r in steps if r["learner"] == learner) else None
+            for row, key in ((0, "reward"), (1, "feasible")):
+                x, y = _curve(
+                    [r[key] * (100.0 if key == "feasible" else 1.0) for r in rows], min(window, len(rows))
+                )
+                axes[row][column].plot(
+                    x, y, color=colours.get(learner), linewidth=0.8, alpha=0.8, label=label
+                )
+        seeds = len({s["seed"] for s in steps if s["problem"] == problem})
+        axes[0][column].set_title(f"{problem}: speed-conditioned policies, {seeds} seed(s) each")
+        axes[0][column].set_ylabel(f"reward, mean over {window} steps (−N)")
+        axes[1][column].set_ylabel(f"feasible designs over {window} steps (%)")
+        axes[1][column].set_xlabel("environment steps (simulations)")
+        axes[0][column].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _ledger_figure(
+    ledger: list[dict[str, Any]], curves: list[dict[str, Any]], ga_runs: list[dict[str, Any]], path: Path
+) -> None:
+    """Left: simulations against the number of speeds, one policy against a GA run per speed. Right: the
+    break-even number of speeds against the gap to the GA optimum one accepts, with each policy's gap."""
+    from catenary_env.plots import pyplot
+
+    plt = pyplot()
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12.0, 4.8))
+    colours: dict[str, str] = {}  # a problem's GA line in the colour of its first policy
+    for (problem, learner), rows in _groups(ledger, "problem", "learner").items():
+        n = [r["n_speeds"] for r in rows]
+        label = f"{problem} {learner} policy (gap {rows[0]['gap_percent']:+.0f} %)"
+        colour = left.plot(n, [r["policy_simulations"] for r in rows], "-o", markersize=3, label=label)[
+            0
+        ].get_color()
+        if problem not in colours:
+            colours[problem] = colour
+            left.plot(
+                n, [r["ga_simulations"] for r in rows], "--", color=colour, label=f"{problem}: GA per speed"
+            )
+        label = f"{problem}: GA stopped at the {learner} policy's σ"
+        left.plot(n, [r["ga_simulations_to_policy_sigma"] for r in rows], ":", color=colour, label=label)
+        first = rows[0]
+        label = f"{problem} {learner} policy"
+        right.plot([first["gap_percent"]], [first["break_even_same_sigma"]], "o", color=colour, label=label)
+    for problem, colour in colours.items():
+        training = next(r["training_simulations"] for r in ledger if r["problem"] == problem)
+        points = [
+            (g, n) for g, _, n in break_even_by_gap(curves, ga_runs, problem, training) if math.isfinite(n)
+        ]
+        if points:
+            right.plot(
+                *zip(*points, strict=True), "-", color=colour, label=f"{problem}: a policy of {training:.0f}"
+            )
+    left.set(xscale="log", yscale="log", xlabel="number of speeds N", ylabel="simulations")
+    left.set_title("One policy against a GA run per speed")
+    right.set(yscale="log", xlabel="gap to the GA optimum accepted (%)", ylabel="break-even number of speeds")
+    right.set_title("Speeds from which the policy is cheaper")
+    left.legend(fontsize=7)
+    right.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The study's options (``catenary experiment rl-amortised``, ``python -m experiments.rl_amortised``)."""
+    add_full_option(parser, "the study fidelity, B1 and SW1, PPO and SAC, 3 seeds of 10,000 steps (days)")
+    parser.add_argument(
+        "--problems", nargs="+", default=[], choices=CHOICES, metavar="NAME",
+        help=f"the design problems, of {' '.join(CHOICES)} (default: B1 SW1; quick: B1)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--learners", nargs="+", default=list(LEARNERS), choices=list(LEARNERS), metavar="NAME",
+        help=f"the RL learners, of {' '.join(LEARNERS)} (default: all)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--seeds", nargs="+", type=int, default=[], metavar="S",
+        help="the seeds of each learner (default: 0 1 2; quick: 0)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--envs", type=worker_count, default=2, metavar="N",
+        help="envs a policy trains on at once, each in its worker process (default 2: both cores)",
+    )  # fmt: skip
+    add_workers_option(parser, 2, "the GA's and the given designs' simulations")
+    add_out_option(parser)
+    add_store_option(parser)
+
+
+def cli(argv: list[str] | None = None) -> int:
+    """``python -m experiments.rl_amortised``: the study with the options of :func:`add_arguments`."""
+    return run_study(sys.modules[__name__], argv, "python -m experiments.rl_amortised")
+
+
+if __name__ == "__main__":
+    raise SystemExit(run_cli(cli, "python -m experiments.rl_amortised"))

@@ -1,0 +1,155 @@
+"""Study 5b (docs/problems.md, 'Experiments'): speed-conditioned policies against a GA run per speed, and the
+amortisation ledger. The whole study runs in seconds on the synthetic problem whose optimum moves with the
+speed; the real quick setting (B1, the "test" fidelity) is behind the ``slow`` marker."""
+
+from __future__ import annotations
+
+import math
+import shutil
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("matplotlib", reason="the study's figures need matplotlib")
+pytest.importorskip("gymnasium", reason="the policies train on design environments")
+pytest.importorskip("stable_baselines3", reason="PPO and SAC come from stable-baselines3")
+
+from catenary_env.problems.design_problem import DesignProblem  # noqa: E402
+from experiments import rl_amortised  # noqa: E402
+from experiments.common import read_csv  # noqa: E402
+from optimizers import synthetic  # noqa: E402
+from optimizers.rl import load_policy  # noqa: E402
+
+OUTPUTS = ["amortised.md", "ledger.csv", "learning_curves.png", "ledger.png"]
+
+
+def _no_simulation(monkeypatch: pytest.MonkeyPatch) -> None:
+    def refuse(*args, **kwargs):
+        raise AssertionError("a design was simulated")
+
+    monkeypatch.setattr(DesignProblem, "evaluate", refuse)
+    monkeypatch.setattr(synthetic, "simulate_quadratic", refuse)
+
+
+def _check_study(config: rl_amortised.Config, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    folder = rl_amortised.main(config)
+    assert folder == tmp_path / "rl" / "amortised"
+    steps = read_csv(folder / "steps.csv")
+    runs = len(config.problems) * len(config.learners) * len(config.seeds)
+    assert len(steps) == runs * config.policy_budget
+    for s in steps:  # trained on 200-320 km/h, never in a held-out band
+        assert 200.0 <= s["speed_kmh"] <= 320.0
+        assert not any(a <= s["speed_kmh"] <= b for a, b in rl_amortised.HELD_OUT)
+    designs = read_csv(folder / "designs.csv")
+    for problem in config.problems:
+        for learner in config.learners:
+            chosen = [r for r in designs if r["problem"] == problem and r["design"] == learner]
+            assert {(r["speed_kmh"], bool(r["held_out"])) for r in chosen} == set(config.speeds)
+            for seed in config.seeds:
+                path = folder / "policies" / f"{learner}-{problem}-seed{seed}.zip"
+                _, record = load_policy(path)
+                assert record.learner == learner and record.problem == problem
+                assert record.env_spec.excluded_speeds == rl_amortised.HELD_OUT
+                assert record.command == path.with_suffix(".txt").read_text(encoding="utf-8").strip()
+    ga = read_csv(folder / "ga_runs.csv")
+    assert {r["speed_kmh"] for r in ga} == {v for v, _ in config.speeds}
+    assert all(r["n_simulations"] == config.ga_budget for r in ga)
+    text = (folder / "amortised.md").read_text(encoding="utf-8")
+    assert f"### Policies against a GA run per speed (GA: {config.ga_budget} simulations" in text
+    assert "### Amortisation ledger" in text
+    for name in OUTPUTS:
+        assert (folder / name).stat().st_size > 0
+
+    steps_text = (folder / "steps.csv").read_text(encoding="utf-8")
+    _no_simulation(monkeypatch)
+    copy = tmp_path / "data_only"
+    copy.mkdir()
+    for csv in folder.glob("*.csv"):
+        shutil.copy(csv, copy)
+    (copy / "ledger.csv").unlink()
+    rl_amortised.report(copy)  # from the data alone
+    assert (copy / "amortised.md").read_text(encoding="utf-8") == text
+    rl_amortised.main(config)  # replayed from the store: nothing simulated
+    assert (folder / "steps.csv").read_text(encoding="utf-8") == steps_text
+
+
+def test_the_study_runs_on_the_synthetic_problem_and_replays(tmp_path, monkeypatch):
+    config = rl_amortised.Config(
+        out=tmp_path, problems=("synthetic-speed-quadratic",), envs=1, workers=1, seeds=(0, 1)
+    )
+    _check_study(config, tmp_path, monkeypatch)
+
+
+@pytest.mark.slow  # the real quick study: PPO and SAC on B1 on two envs, GA runs at 230 and 260 km/h
+def test_rl_amortised_quick(tmp_path, monkeypatch):
+    _check_study(rl_amortised.Config(out=tmp_path), tmp_path, monkeypatch)
+
+
+def test_break_even_counts_the_policys_simulation_per_speed():
+    assert rl_amortised.break_even(1000.0, 101.0) == 10.0  # 10 x 101 = 1010 >= 1000 + 10
+    assert rl_amortised.break_even(1000.0, 100.0) == 11.0  # 10 x 100 < 1010; 11 x 100 >= 1011
+    assert rl_amortised.break_even(1000.0, 1.0) == math.inf
+
+
+def test_the_ledger_charges_the_ga_what_it_needed_to_reach_the_policys_sigma():
+    curves = [
+        {"problem": "P", "speed_kmh": 230.0, "simulations": 1.0, "best_sigma_N": 30.0},
+        {"problem": "P", "speed_kmh": 230.0, "simulations": 40.0, "best_sigma_N": 25.0},
+        {"problem": "P", "speed_kmh": 230.0, "simulations": 300.0, "best_sigma_N": 20.0},
+    ]
+    assert rl_amortised.ga_simulations_to(curves, "P", 230.0, 26.0) == 40.0
+    assert rl_amortised.ga_simulations_to(curves, "P", 230.0, 19.0) == math.inf
+    designs = [
+        {
+            "problem": "P",
+            "design": "reference",
+            "seed": -1,
+            "speed_kmh": 230.0,
+            "held_out": 1,
+            "sigma_N": 32.0,
+        },
+        {"problem": "P", "design": "ga", "seed": 0, "speed_kmh": 230.0, "held_out": 1, "sigma_N": 20.0},
+        {"problem": "P", "design": "sac", "seed": 0, "speed_kmh": 230.0, "held_out": 1, "sigma_N": 26.0},
+    ]
+    ga_runs = [{"problem": "P", "speed_kmh": 230.0, "n_simulations": 1000}]
+    steps = [{"problem": "P", "learner": "sac", "seed": 0}] * 500
+    ledger = rl_amortised.amortisation_ledger(designs, curves, ga_runs, steps, n_speeds=(1, 10))
+    first, tenth = ledger
+    assert first["gap_percent"] == pytest.approx(30.0)
+    costs = ("training_simulations", "ga_per_speed", "ga_per_speed_to_policy_sigma")
+    assert [first[k] for k in costs] == [500.0, 1000.0, 40.0]
+    assert first["break_even_full"] == 1.0  # one GA run of 1000 costs more than 500 + 1
+    assert first["break_even_same_sigma"] == 13.0  # 13 x 40 = 520 >= 500 + 13
+    totals = ("policy_simulations", "ga_simulations", "ga_simulations_to_policy_sigma")
+    assert [tenth[k] for k in totals] == [510.0, 10000.0, 400.0]
+
+
+def test_a_problem_whose_reference_is_not_action_0_is_refused():
+    rl_amortised.check_starts_at_reference("B1")
+    rl_amortised.check_starts_at_reference("synthetic-speed-quadratic")
+    with pytest.raises(ValueError, match="B2"):
+        rl_amortised.check_starts_at_reference("B2")
+
+
+def test_a_full_run_is_reproduced_by_the_catenary_optimize_command_beside_its_policy(tmp_path):
+    """The full setting trains with the learners' defaults, so the command written beside each policy is a
+    ``catenary optimize`` that makes the same run (the same env, options and budget: it resumes it)."""
+    import argparse
+    import dataclasses
+    import shlex
+
+    from optimizers.cli.optimize import add_arguments, rl_env_spec
+    from optimizers.rl import LEARNERS, EnvSpec
+
+    config = rl_amortised.Config(full=True, out=tmp_path)
+    store, policy = tmp_path / "runs.sqlite", tmp_path / "sac.zip"
+    command = rl_amortised.reproduce_command(config, store, "B1", "sac", 2, policy)
+    words = shlex.split(command)
+    assert words[:2] == ["catenary", "optimize"]
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    args = parser.parse_args(words[2:])
+    assert (args.optimizer, args.budget, args.seed, args.store) == ("sac", 10_000, 2, str(store))
+    expected = EnvSpec("Catenary-B1-v0", None, rl_amortised.SPEED_RANGE, "study", rl_amortised.HELD_OUT)
+    assert rl_env_spec("B1", args) == expected
+    assert dataclasses.replace(LEARNERS["sac"](), n_envs=args.workers) == config.learner_options("sac")
