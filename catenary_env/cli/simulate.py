@@ -50,6 +50,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "(default: EN 50367, 0.00097 v² + 70 with v in km/h)",
     )
     options.add_design_arguments(p)
+    options.add_buildability_argument(p)
     options.add_fidelity_arguments(p)
     options.add_output_arguments(p, "the contact force (N) along the track (m)")
 
@@ -78,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     with options.static_shape_of(args):
         static = solve_static(catenary, design, fidelity)
-    reason = static.infeasibility()
+    reason = static.infeasibility() or options.buildability_violation_of(static, args)
     if reason:
         raise UsageError(f"{options.design_options(args)}: the design is statically infeasible: {reason}")
     times = {"shape_time": time.perf_counter() - start, "calibration_time": 0.0}
@@ -134,6 +135,7 @@ def _record(
         "n_spans": fidelity.n_spans,
         "analysis_window": list(sim.window),
         "statistics": stats,
+        "acceptance": sim.acceptance.as_dict() if sim.acceptance is not None else None,
         "feasible": stats["contact_loss_percent"] == 0.0,
         "wall_time": sum(times.values()),
         **times,
@@ -152,7 +154,8 @@ def _text(result: dict[str, Any], args: argparse.Namespace, sim: Any) -> str:
         f"{result['n_spans']} spans, analysis {window[0]:.0f}–{window[1]:.0f} m; {result['wall_time']:.2f} s "
         f"(shape {result['shape_time']:.2f} s{calibration}, passage {result['passage_time']:.2f} s)"
     )
-    return "\n".join([head, *sim.statistics.text_lines()])
+    acceptance = sim.acceptance.text_lines() if sim.acceptance is not None else []
+    return "\n".join([head, *sim.statistics.text_lines(), *acceptance])
 
 
 def _figure(sim: Any, name: str, speed_kmh: float, path: str) -> None:

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 from ..errors import CatenaryError
 from .options import CHOICES, ModellingOptions
+from .plausibility import implausibility, physical_fields
 
 
 class DefinitionError(CatenaryError, ValueError):
@@ -24,6 +25,15 @@ class DefinitionError(CatenaryError, ValueError):
 MAX_SPAN_LENGTH = 500.0
 """Longest span accepted, m: far above any overhead line (EN 50119 spans are 30 to 80 m), low enough that a
 mistyped length is named as such rather than as asymmetric droppers."""
+
+
+def check_plausible_fields(where: str, record: object) -> None:
+    """Refuse the first numeric field of a definition outside its plausible range (docs/model.md, 'Plausible
+    ranges'), naming the field and the unit the value looks like."""
+    for w, name, value in physical_fields(where, record):
+        problem = implausibility(w, name, value)
+        if problem is not None:
+            raise DefinitionError(problem)
 
 
 def _check_positive(where: str, name: str, value: float, allow_zero: bool = False) -> None:
@@ -282,6 +292,7 @@ class CatenaryDefinition:
         check_dropper_positions(self.dropper_positions, self.span_length, f"{where}.dropper_positions")
         if self.stitch_wire is not None:
             check_stitch_reach(self.dropper_positions, self.stitch_wire.length, self.span_length, where)
+        check_plausible_fields(where, self)
         if not (isinstance(self.n_spans, int) and 3 <= self.n_spans <= 200):
             raise DefinitionError(f"{where}.n_spans = {self.n_spans!r}: must be an integer in [3, 200]")
         if not (isinstance(self.analysis_spans, int) and 1 <= self.analysis_spans <= self.n_spans - 2):
@@ -384,3 +395,4 @@ class PantographDefinition:
             _check_positive(where, f"dampings[{i}]", c, allow_zero=True)
         if self.uplift_force is not None:
             _check_positive(where, "uplift_force", self.uplift_force)
+        check_plausible_fields(where, self)

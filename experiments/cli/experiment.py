@@ -34,6 +34,10 @@ STUDIES = {
         "optimizer_comparison", "seven optimisers on B1 and SW1 at equal budgets, with IOHprofiler output"
     ),
     "rl": Study("rl_studies", "PPO learning curves, a speed-conditioned policy, a design for 200-320 km/h"),
+    "tolerance": Study(
+        "tolerance",
+        "σ under installation tolerances, the design studies under buildability limits, robust GA",
+    ),
 }
 
 
