@@ -277,15 +277,16 @@ def run_buildable(config: Config, folder: Path) -> None:
             row = _row(label, name, 0.0, -1, ev)
             row["x"] = " ".join(f"{v:g}" for v in x)
             row["reference_sigma_N"] = reference.statistics.std if reference.statistics else math.nan
-            row["buildable"] = int(not _violation(name, tuple(x), config.fidelity, uplift))
+            row["buildable"] = int(_buildable(name, tuple(x), config.fidelity, uplift))
             rows.append(row)
     write_csv(folder / "buildable.csv", rows)
 
 
-def _violation(name: str, x: tuple[float, ...], fidelity: str, uplift: float) -> str:
+def _buildable(name: str, x: tuple[float, ...], fidelity: str, uplift: float) -> bool:
+    """Statically feasible and within the buildability defaults (contact loss aside)."""
     variant = get_problem(name).with_options(buildability=DEFAULT_BUILDABILITY)
     ev = variant.evaluate(x, DESIGN_SPEED, fidelity, uplift)
-    return ev.reason if ev.reason.startswith("buildability") else ""
+    return not ev.reason.startswith(("design", "static", "buildability"))
 
 
 def run_robust(config: Config, folder: Path) -> None:
@@ -374,8 +375,8 @@ def spread_summary(rows: list[dict]) -> list[dict[str, Any]]:
 
 def meeting_tolerance(summary: list[dict], design: str, level_design: str) -> float:
     """The height tolerance (mm) at which ``design``'s median σ meets the level wire's, by linear
-    interpolation between the levels; 0 where it is not below it nominally, inf where not met up to the
-    largest level, NaN where a median is missing."""
+    interpolation between the levels at which both have feasible draws; 0 where it is not below it as
+    designed, inf where it stays below at every such level, NaN where neither is feasible as designed."""
     levels = [(0.0, _nominal(summary, design), _nominal(summary, level_design))]
     for s in summary:
         if s["design"] == design:
@@ -383,8 +384,8 @@ def meeting_tolerance(summary: list[dict], design: str, level_design: str) -> fl
                 (t for t in summary if t["design"] == level_design and t["level_mm"] == s["level_mm"]), None
             )
             levels.append((s["level_mm"], s["median_N"], other["median_N"] if other else math.nan))
-    gaps = [(mm, opt - lev) for mm, opt, lev in levels]
-    if any(math.isnan(g) for _, g in gaps):
+    gaps = [(mm, opt - lev) for mm, opt, lev in levels if not math.isnan(opt - lev)]
+    if not gaps or gaps[0][0] != 0.0:
         return math.nan
     if gaps[0][1] >= 0.0:
         return 0.0
