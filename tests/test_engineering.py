@@ -311,8 +311,10 @@ def test_the_robust_env_rewards_minus_the_robust_sigma():
     x = env.unwrapped.action_to_x(np.zeros(5))
     uplift = get_problem("B1").uplift_force(300.0, "test")
     expected = get_problem("B1").with_options(robust=robust).evaluate(x, 300.0, "test", uplift).statistics.std
-    _, reward, *_ = env.step(np.zeros(5, dtype=np.float32))
+    _, reward, _, _, info = env.step(np.zeros(5, dtype=np.float32))
     assert reward == pytest.approx(-expected, rel=1e-12)
+    assert info["acceptance_passed"] == info["acceptance"].passed
+    assert next(c for c in info["acceptance"].criteria if c.name == "σ / Fm").value == info["std_over_mean"]
     with pytest.raises(ValueError, match="only with objective='robust'"):
         gym.make("Catenary-B1-v0", fidelity="test", robust=robust)
 
@@ -332,11 +334,18 @@ def test_catenary_tolerance_prints_its_summary_as_json(capsys):
     assert "--height = 0.2: must lie in [0, 0.05] m" in capsys.readouterr().err
 
 
-def test_catenary_evaluate_shows_the_acceptance_block(capsys):
-    assert cli_main(["evaluate", "B1", "--x", "0", "0", "0", "0", "0", "--fidelity", "test", "--json"]) == 0
+def test_catenary_evaluate_shows_the_acceptance_block_under_the_limits_given(capsys, tmp_path):
+    command = ["evaluate", "B1", "--x", "0", "0", "0", "0", "0", "--fidelity", "test", "--json"]
+    assert cli_main(command) == 0
     record = json.loads(capsys.readouterr().out)
     assert record["acceptance"]["limits"] == "en50367-ac"
     assert {c["name"] for c in record["acceptance"]["criteria"]} >= {"σ / Fm", "mean force Fm (upper)"}
+    text = preset_path("acceptance", "en50367-ac").read_text(encoding="utf-8")
+    strict = tmp_path / "strict.toml"
+    strict.write_text(text.replace('"en50367-ac"', '"strict"').replace("= 0.3 ", "= 0.01 "), encoding="utf-8")
+    assert cli_main([*command, "--acceptance", str(strict)]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["acceptance"]["limits"] == "strict" and not record["acceptance"]["passed"]
 
 
 def test_the_tolerance_study_finds_where_an_optimum_meets_the_level_wire():

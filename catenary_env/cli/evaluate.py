@@ -10,6 +10,7 @@ contact wire 5 mm lower, at 300 km/h. ``--json`` prints one JSON object instead 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 from typing import Any
@@ -21,6 +22,7 @@ from ..errors import UsageError
 from ..model.design import check_speed
 from ..pipeline import FIDELITIES, Evaluation
 from ..problems import PROBLEMS, DesignProblem
+from . import options
 
 
 def add_parser(subparsers: Any) -> None:
@@ -62,6 +64,7 @@ def add_parser(subparsers: Any) -> None:
         "reference study's setting) or the documented defaults (dropper force >= 30 N, length >= 0.5 m, "
         "spacing <= 11 m)",
     )
+    options.add_acceptance_argument(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
 
 
@@ -73,7 +76,10 @@ def run(args: argparse.Namespace) -> int:
     problem = PROBLEMS[args.problem].with_options(buildability=buildability_named(args.buildability))
     x = checked_variables(problem, list(args.x))
     check_speed(problem.catenary_definition, args.speed / 3.6)
+    limits = options.acceptance_limits(args)  # a bad file is refused before any solve
     evaluation = problem.evaluate(x, args.speed, args.fidelity)
+    acceptance = options.reassessed(limits, evaluation.statistics, args.speed, evaluation.acceptance)
+    evaluation = dataclasses.replace(evaluation, acceptance=acceptance)
     record = _record(problem, x, list(args.x), args.speed, args.fidelity, evaluation)
     if args.json:
         print(json.dumps(finite_or_null(record), allow_nan=False))

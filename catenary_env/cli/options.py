@@ -216,6 +216,31 @@ def add_buildability_argument(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_acceptance_argument(parser: argparse.ArgumentParser) -> None:
+    """``--acceptance FILE``: acceptance limits of the acceptance block (docs/acceptance.md)."""
+    parser.add_argument(
+        "--acceptance",
+        metavar="FILE",
+        help="acceptance limits: a preset name or an edited copy of it (.toml; default en50367-ac, the "
+        "EN 50367 criteria for AC lines; docs/acceptance.md)",
+    )
+
+
+def acceptance_limits(args: argparse.Namespace) -> Any:
+    """The ``--acceptance`` limits, loaded and checked (before any solve), or None for the default."""
+    from ..model.presets import load_acceptance
+
+    name = getattr(args, "acceptance", None)
+    return None if name is None else load_acceptance(name)
+
+
+def reassessed(limits: Any, statistics: Any, speed_kmh: float, default: Any) -> Any:
+    """The acceptance block of ``statistics`` under ``limits``; ``default`` (the pipeline's) without them."""
+    from ..analysis.acceptance import assess
+
+    return default if limits is None or statistics is None else assess(statistics, speed_kmh, limits)
+
+
 def buildability_violation_of(static: Any, args: argparse.Namespace) -> str:
     """The static state's violation of the ``--buildability`` limits, or an empty string."""
     from ..analysis.buildability import buildability_violation

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -51,6 +52,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     options.add_design_arguments(p)
     options.add_buildability_argument(p)
+    options.add_acceptance_argument(p)
     options.add_fidelity_arguments(p)
     options.add_output_arguments(p, "the contact force (N) along the track (m)")
 
@@ -65,6 +67,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--target-mean {args.target_mean}: must be a mean contact force > 0 N")
     catenary = options.catenary_of(args.preset)
     pantograph = options.pantograph_of(args.pantograph or catenary.pantograph)
+    limits = options.acceptance_limits(args)
     design = options.design(catenary, args)
     fidelity = options.fidelity(catenary, args)
     speed = args.speed / 3.6
@@ -91,6 +94,9 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     sim = run_passage(static, pantograph, speed, fidelity, uplift, progress=progress.fraction)
     progress.finish()
+    sim = dataclasses.replace(
+        sim, acceptance=options.reassessed(limits, sim.statistics, args.speed, sim.acceptance)
+    )
     times["passage_time"] = time.perf_counter() - start
     result = _record(args, catenary, pantograph, fidelity, sim, calibrate, times)
     print(json.dumps(result, indent=2) if args.json else _text(result, args, sim))

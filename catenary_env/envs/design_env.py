@@ -117,7 +117,10 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     `std`, `std_over_mean`,
     `statistical_max`, `statistical_min`, `actual_max`, `actual_min` in N, `contact_loss_percent` in %,
     `max_support_uplift` in m; absent when the design was not simulated dynamically),
-    `uplift_force` (N), `dropper_lengths` (m) and `dropper_forces` (N) of a central span,
+    `acceptance` (the EN 50367 acceptance block, :class:`~catenary_env.analysis.acceptance.Acceptance`:
+    each criterion's limit, value, verdict and source tag; docs/acceptance.md) and `acceptance_passed` (bool;
+    both absent where the statistics are), `uplift_force` (N), `dropper_lengths` (m) and `dropper_forces` (N)
+    of a central span,
     `wall_time` (s, of the simulations behind the result) and `clipped` (bool). With a multi-speed
     objective, `speed_kmh`, the statistics and `uplift_force` are arrays over `speeds_kmh`; a design is
     not simulated at the speeds after the first at which it is infeasible (the statistics are then absent,
@@ -334,6 +337,11 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         info["uplift_force"] = (
             uplift[0] if single else np.array(uplift + [math.nan] * (len(self._speeds) - len(uplift)))
         )
+        acceptance = [e.acceptance for e in evaluations]
+        if len(acceptance) == len(self._speeds) and all(a is not None for a in acceptance):
+            info["acceptance"] = acceptance[0] if single else tuple(acceptance)
+            passed = [a.passed for a in acceptance if a is not None]
+            info["acceptance_passed"] = passed[0] if single else np.array(passed)
         info["dropper_lengths"] = tuple(evaluations[0].dropper_lengths)
         info["dropper_forces"] = tuple(evaluations[0].dropper_forces)
         info["wall_time"] = result.wall_time
