@@ -80,7 +80,13 @@ def add_parser(subparsers: Any) -> None:
         default="none",
         help="buildability limits (docs/acceptance.md): none (default) or the documented defaults",
     )
-    parser.add_argument("--fidelity", choices=list(FIDELITIES), default="study", help="model size")
+    parser.add_argument(
+        "--fidelity",
+        choices=list(FIDELITIES),
+        default="study",
+        help="model size: study (20 spans, the design setting; default), reference (the same on the exact "
+        "model) or test (5 coarse spans, for quick checks, not for design conclusions)",
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of text")
 
 
