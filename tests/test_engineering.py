@@ -258,7 +258,7 @@ def test_an_unusual_value_is_warned_about_and_the_presets_are_all_usual(tmp_path
     path = _edited(tmp_path, "system_height = 1.2 ", "system_height = 3.5 ")
     warnings = definition_warnings("catenary 'benchmark'", load_catenary(path))
     assert warnings == [
-        "catenary 'benchmark'.system_height = 3.5 m is unusual (usual: 0.8 to 3 m); check the value"
+        "catenary 'benchmark'.system_height = 3.5 m is unusual (usual: 0.3 to 3 m); check the value"
     ]
     for name in catenary_names():
         assert definition_warnings(name, load_catenary(name)) == [], name
