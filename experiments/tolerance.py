@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from catenary_env.errors import UsageError
 from catenary_env.model.buildability import DEFAULT_BUILDABILITY, NO_LIMITS, BuildabilityLimits
 from catenary_env.model.tolerances import PRACTICE, Tolerances, draw_deviations
 from catenary_env.pipeline import Evaluation
@@ -87,7 +88,11 @@ class Config:
     def __post_init__(self) -> None:
         unknown = [p for p in self.parts if p not in PARTS]
         if unknown:
-            raise ValueError(f"--parts {' '.join(unknown)}: must be among {', '.join(PARTS)}")
+            raise UsageError(f"--parts {' '.join(unknown)}: must be among {', '.join(PARTS)}")
+        if self.draws is not None and not 1 <= self.draws <= 10000:
+            raise UsageError(f"--draws {self.draws}: must be an integer in [1, 10000]")
+        if self.seed < 0:
+            raise UsageError(f"--seed {self.seed}: must be an integer >= 0")
 
     @property
     def fidelity(self) -> str:

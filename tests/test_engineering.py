@@ -363,6 +363,14 @@ def test_the_tolerance_study_finds_where_an_optimum_meets_the_level_wire():
     assert meeting_tolerance(summary, "opt", "level") == math.inf
 
 
+def test_the_tolerance_study_refuses_a_draw_count_before_simulating(monkeypatch):
+    from experiments import tolerance
+
+    monkeypatch.setattr(tolerance, "main", lambda config: pytest.fail("simulated with a bad --draws"))
+    with pytest.raises(UsageError, match=r"--draws 0: must be an integer in \[1, 10000\]"):
+        tolerance.cli(["--draws", "0"])
+
+
 def test_a_tiny_tolerance_study_writes_its_data_and_remakes_its_report(tmp_path):
     from experiments import tolerance
 
