@@ -254,8 +254,6 @@ def check_section_deviations(
     stitch = None if catenary.stitch_wire is None else 0.5 * catenary.stitch_wire.length
     try:
         check_deviations(deviations, design.dropper_positions, catenary.span_length, fidelity.n_spans, stitch)
-    except DesignError:
-        raise
     except DefinitionError as error:
         raise DesignError(str(error)) from None
 

@@ -150,7 +150,8 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     - `robust=None`: with `objective="robust"`, a :class:`~catenary_env.problems.tolerance.RobustObjective`
       (default: 8 draws of seed 0 of the practice tolerances, their mean σ). The same draws serve every
       design of the env; the statistics in `info` are each statistic's mean (or quantile) over the draws,
-      and a design is infeasible where any draw is.
+      and a design is infeasible where any draw is. `normalize_reward` divides by the reference design's
+      σ as drawn.
     - `render_mode=None`: or `"rgb_array"`, a picture of the last design (the reference design before
       the first step) with its statistics.
     - `vector_kwargs`: registered for `gymnasium.make_vec` (same-step autoreset), which reads it;

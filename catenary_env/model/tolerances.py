@@ -49,7 +49,7 @@ class Tolerances:
     height: float
     position: float
     distribution: str = "uniform"
-    provenance: dict[str, str] = field(default_factory=dict, compare=False, hash=False)
+    provenance: dict[str, str] = field(default_factory=dict, compare=False, hash=False, repr=False)
 
     def __post_init__(self) -> None:
         for name, high in (("height", 0.05), ("position", 0.5)):
