@@ -56,14 +56,7 @@ def add_parser(subparsers: Any) -> None:
         help="model size: study (20 spans, the design setting; default) or test (5 spans, coarse "
         "mesh; for quick checks, not for design conclusions)",
     )
-    parser.add_argument(
-        "--buildability",
-        choices=("none", "default"),
-        default="none",
-        help="buildability limits checked with the static verdict (docs/acceptance.md): none (default, the "
-        "reference study's setting) or the documented defaults (dropper force >= 30 N, length >= 0.5 m, "
-        "spacing <= 11 m)",
-    )
+    options.add_buildability_argument(parser)
     options.add_acceptance_argument(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
 

@@ -211,8 +211,9 @@ def add_buildability_argument(parser: argparse.ArgumentParser) -> None:
         "--buildability",
         choices=("none", "default"),
         default="none",
-        help="buildability limits checked with the static verdict (docs/acceptance.md): none (default) or "
-        "the documented defaults (dropper force >= 30 N, length >= 0.5 m, spacing <= 11 m)",
+        help="buildability limits checked with the static verdict (docs/acceptance.md): none (default, the "
+        "reference study's setting) or the documented defaults (dropper force >= 30 N, length >= 0.5 m, "
+        "spacing <= 11 m)",
     )
 
 

@@ -22,6 +22,7 @@ from typing import Any
 from ..errors import UsageError
 from ..pipeline import FIDELITIES
 from ..problems import PROBLEMS
+from . import options
 from .evaluate import checked_variables, finite_or_null
 from .progress import ProgressDisplay
 
@@ -74,12 +75,7 @@ def add_parser(subparsers: Any) -> None:
     )
     parser.add_argument("--seed", type=int, default=0, help="seed of the draws (default 0)")
     parser.add_argument("--speed", type=float, default=300.0, metavar="KMH", help="train speed, km/h")
-    parser.add_argument(
-        "--buildability",
-        choices=("none", "default"),
-        default="none",
-        help="buildability limits (docs/acceptance.md): none (default) or the documented defaults",
-    )
+    options.add_buildability_argument(parser)
     parser.add_argument(
         "--fidelity",
         choices=list(FIDELITIES),
