@@ -4,7 +4,10 @@ docs/performance.md, 'Model fidelities'. Cases:
 
 - the reference design of each of the 8 problems at 250, 300 and 350 km/h;
 - 20 seeded random statically feasible designs of B1, B2, B3, SW1, SW2 and SW3 at 300 km/h;
-- the EN 50318:2002 model at 250 and 300 km/h (its own section and uplift force).
+- the EN 50318:2002 model at 250 and 300 km/h (its own section and uplift force);
+- installation-tolerance draws (docs/acceptance.md, 'Installation tolerances'): the level wire of B1 and SW1
+  and their recorded optima, built with random deviations of every dropper's height and position, so that
+  every span differs and each is its own span type of the span-mode model (:data:`TOLERANCE_CASES`).
 
 Both models run each case with the same uplift force (the problem's, calibrated on the study model).
 The contract holds when, in every case, σ is within 1 % of the reference, the mean within 0.5 %, the
@@ -20,6 +23,7 @@ fingerprint; a test fails when it is not the current one, naming :data:`REFRESH`
     python benchmarks/fidelity_contract.py            # table; exit status 1 when the contract fails
     python benchmarks/fidelity_contract.py --json     # one JSON object with the figures and "passed"
     python benchmarks/fidelity_contract.py --workers 2
+    python benchmarks/fidelity_contract.py --only tolerance   # the cases whose name contains "tolerance"
 """
 
 from __future__ import annotations
@@ -41,6 +45,7 @@ from scipy.stats import spearmanr  # noqa: E402
 from catenary_env.fingerprint import model_fingerprint  # noqa: E402
 from catenary_env.model.design import level_design  # noqa: E402
 from catenary_env.model.presets import load_catenary, load_pantograph  # noqa: E402
+from catenary_env.model.tolerances import PRACTICE, Tolerances, draw_deviations  # noqa: E402
 from catenary_env.pipeline import FIDELITIES, Fidelity, evaluate, solve_static  # noqa: E402
 from catenary_env.problems import PROBLEMS  # noqa: E402
 
@@ -56,6 +61,18 @@ RANDOM_PROBLEMS = ("B1", "B2", "B3", "SW1", "SW2", "SW3")
 RANDOM_DESIGNS = 20
 SEED = 2026
 TOLERANCE = {"std": 0.01, "mean": 0.005, "extremes": 0.02, "uplift": 0.02, "spearman": 0.99}
+TOLERANCE_CASES = (
+    ("B1", "reference", 2.0, (0, 1)),
+    ("B1", "reference", 5.0, (0,)),
+    ("B1", "optimum", 1.0, (0,)),
+    ("SW1", "reference", 2.0, (0, 1)),
+    ("SW1", "reference", 5.0, (0,)),
+    ("SW1", "optimum", 1.0, (0,)),
+)
+"""(problem, design, ± height mm, draws) of the tolerance cases: draws of seed :data:`SEED` with the practice
+dropper-position error; the optima are the design studies' recorded ones (results/design)."""
+OPTIMA = {"B1": (-0.012, -0.01, -0.016, -0.02, -0.018), "SW1": (-0.01, -0.005, -0.019, -0.01)}
+"""The design studies' recorded optima of B1 and SW1 (results/design/<problem>/summary.json), m."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -68,6 +85,8 @@ class Case:
     speed_kmh: float
     uplift_force: float
     random: bool
+    tolerance_mm: float = 0.0
+    draw: int = -1
 
 
 def _random_designs(problem_name: str, count: int, seed: int) -> list[tuple[float, ...]]:
@@ -111,6 +130,12 @@ def contract_cases() -> list[Case]:
     en = load_pantograph("en50318-2002")
     for speed in (250.0, 300.0):
         cases.append(Case(f"EN50318 {speed:.0f}", "", (), speed, float(en.uplift_force), False))
+    for name, design, mm, draws in TOLERANCE_CASES:
+        x = tuple(PROBLEMS[name].reference_x().tolist()) if design == "reference" else OPTIMA[name]
+        force = uplift(f"{name} reference 300", name, 300.0)
+        for k in draws:
+            label = f"{name} {design} tolerance {mm:g}mm {k:02d}"
+            cases.append(Case(label, name, x, 300.0, force, False, mm, k))
     return cases
 
 
@@ -123,7 +148,12 @@ def run_case(case: Case, dynamics: str) -> dict:
     """Statistics of one case on one model (``"exact"`` or ``"span-modes"``)."""
     if case.problem and case.x:
         fidelity = dataclasses.replace(FIDELITIES["study"], dynamics=dynamics)
-        ev = PROBLEMS[case.problem].evaluate(case.x, case.speed_kmh, fidelity, uplift_force=case.uplift_force)
+        problem = PROBLEMS[case.problem]
+        deviations = None
+        if case.draw >= 0:
+            tolerances = Tolerances(case.tolerance_mm / 1000.0, PRACTICE.position, PRACTICE.distribution)
+            deviations = draw_deviations(tolerances, fidelity.n_spans, problem.n_droppers, SEED, case.draw)
+        ev = problem.evaluate(case.x, case.speed_kmh, fidelity, case.uplift_force, deviations)
     elif case.problem:  # B3 and SW3 are compared with the level wire on the preset's droppers
         problem = PROBLEMS[case.problem]
         fidelity = dataclasses.replace(FIDELITIES["study"], dynamics=dynamics)
@@ -274,8 +304,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=1, help="processes for the simulations")
     parser.add_argument("--recompute", action="store_true", help="recompute the reference results")
     parser.add_argument("--reference-only", action="store_true", help="only compute the reference results")
+    parser.add_argument("--only", metavar="TEXT", help="only the cases whose name contains TEXT")
     args = parser.parse_args(argv)
-    cases = contract_cases()
+    cases = [c for c in contract_cases() if args.only is None or args.only in c.name]
     reference = reference_results(cases, args.workers, args.recompute)
     if args.reference_only:
         return 0

@@ -9,6 +9,7 @@ solve.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Callable
@@ -17,6 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from .analysis.acceptance import Acceptance, assess
+from .analysis.buildability import buildability_violation
 from .analysis.statistics import ContactStatistics, filtered_contact_force, passage_statistics
 from .blas_threads import single_threaded
 from .dynamics.exact import PreparedExact
@@ -27,8 +30,12 @@ from .dynamics.pantograph import frame_force
 from .dynamics.protocol import ContactPoint, Passage
 from .dynamics.span_modes import PreparedSpanModes
 from .fem.layout import build_layout
-from .model.definition import CatenaryDefinition, PantographDefinition
+from .model.acceptance_limits import AcceptanceLimits
+from .model.buildability import NO_LIMITS, BuildabilityLimits
+from .model.definition import CatenaryDefinition, DefinitionError, PantographDefinition
 from .model.design import Design, DesignError, check_design, check_speed
+from .model.presets import load_acceptance
+from .model.tolerances import SectionDeviations, check_deviations
 from .statics.shape_finding import ShapeFindingError, StaticSolution, find_shape
 
 NEAR_CUTOFF = math.inf
@@ -120,6 +127,9 @@ class Evaluation:
     trace_position, trace_force : tuple of float
         The filtered contact force (N) along the analysis section (m), at most
         :data:`TRACE_POINTS` samples, for pictures; empty when no passage was simulated.
+    acceptance : Acceptance or None
+        The EN 50367 acceptance block of the passage (docs/acceptance.md); None when no passage was
+        simulated.
     """
 
     feasible: bool
@@ -131,6 +141,7 @@ class Evaluation:
     wall_time: float
     trace_position: tuple[float, ...] = ()
     trace_force: tuple[float, ...] = ()
+    acceptance: Acceptance | None = None
 
 
 TRACE_POINTS = 1000
@@ -152,6 +163,8 @@ class Simulation:
         N.
     filtered_force : ndarray, shape (n_steps,)
         The 20 Hz low-pass filtered contact force at every step, N (filtered once, here).
+    acceptance : Acceptance or None
+        The EN 50367 acceptance block of the passage (docs/acceptance.md).
     """
 
     static: StaticSolution
@@ -161,6 +174,17 @@ class Simulation:
     window: tuple[float, float]
     uplift_force: float
     filtered_force: NDArray[np.float64]
+    acceptance: Acceptance | None = None
+
+
+ACCEPTANCE = "en50367-ac"
+"""The acceptance limits every simulation is assessed against unless told otherwise (docs/acceptance.md)."""
+
+
+@functools.cache
+def default_acceptance() -> AcceptanceLimits:
+    """The :data:`ACCEPTANCE` preset, loaded once per process."""
+    return load_acceptance(ACCEPTANCE)
 
 
 def analysis_window(catenary: CatenaryDefinition, fidelity: Fidelity) -> tuple[float, float]:
@@ -206,16 +230,47 @@ def check_fidelity(catenary: CatenaryDefinition, fidelity: Fidelity) -> None:
 
 
 @single_threaded
-def solve_static(catenary: CatenaryDefinition, design: Design, fidelity: Fidelity) -> StaticSolution:
-    """Check the design and find its static shape (raises ShapeFindingError if Newton fails)."""
+def solve_static(
+    catenary: CatenaryDefinition,
+    design: Design,
+    fidelity: Fidelity,
+    deviations: SectionDeviations | None = None,
+) -> StaticSolution:
+    """Check the design and find its static shape (raises ShapeFindingError if Newton fails); ``deviations``:
+    installation tolerances of every span (docs/acceptance.md)."""
     check_design(catenary, design)
     check_fidelity(catenary, fidelity)
-    return _find_static(catenary, design, fidelity)
+    check_section_deviations(catenary, design, fidelity, deviations)
+    return _find_static(catenary, design, fidelity, deviations)
 
 
-def _find_static(catenary: CatenaryDefinition, design: Design, fidelity: Fidelity) -> StaticSolution:
+def check_section_deviations(
+    catenary: CatenaryDefinition, design: Design, fidelity: Fidelity, deviations: SectionDeviations | None
+) -> None:
+    """Refuse deviations that do not fit the section
+    (:func:`~catenary_env.model.tolerances.check_deviations`)."""
+    if deviations is None:
+        return
+    stitch = None if catenary.stitch_wire is None else 0.5 * catenary.stitch_wire.length
+    try:
+        check_deviations(deviations, design.dropper_positions, catenary.span_length, fidelity.n_spans, stitch)
+    except DefinitionError as error:
+        raise DesignError(str(error)) from None
+
+
+def _find_static(
+    catenary: CatenaryDefinition,
+    design: Design,
+    fidelity: Fidelity,
+    deviations: SectionDeviations | None = None,
+) -> StaticSolution:
     layout = build_layout(
-        catenary, design, fidelity.n_spans, fidelity.contact_wire_element, fidelity.messenger_wire_element
+        catenary,
+        design,
+        fidelity.n_spans,
+        fidelity.contact_wire_element,
+        fidelity.messenger_wire_element,
+        deviations,
     )
     return find_shape(layout)
 
@@ -269,7 +324,8 @@ def run_passage(
     window = analysis_window(catenary, fidelity)
     filtered = filtered_contact_force(trajectory)
     stats = passage_statistics(trajectory, window, filtered)
-    return Simulation(static, system, trajectory, stats, window, uplift_force, filtered)
+    acceptance = assess(stats, speed * 3.6, default_acceptance())
+    return Simulation(static, system, trajectory, stats, window, uplift_force, filtered, acceptance)
 
 
 def _statistics_steps(catenary: CatenaryDefinition, fidelity: Fidelity, speed: float) -> int:
@@ -295,8 +351,11 @@ def simulate(
     fidelity: Fidelity,
     uplift_force: float | None = None,
     progress: Callable[[float], None] | None = None,
+    buildability: BuildabilityLimits = NO_LIMITS,
+    deviations: SectionDeviations | None = None,
 ) -> Simulation:
-    """Shape-finding, linearisation and the pantograph passage at ``speed`` (m/s).
+    """Shape-finding, linearisation and the pantograph passage at ``speed`` (m/s); ``buildability`` and
+    ``deviations`` as in :func:`evaluate`.
 
     Raises
     ------
@@ -305,12 +364,13 @@ def simulate(
     ShapeFindingError
         Shape-finding did not converge.
     ValueError
-        The design is statically infeasible (a dropper in compression or of negative length).
+        The design is statically infeasible (a dropper in compression or of negative length, or a
+        buildability limit violated).
     """
     check_speed(catenary, speed)
     force = check_uplift(pantograph, uplift_force)
-    static = solve_static(catenary, design, fidelity)
-    reason = static.infeasibility()
+    static = solve_static(catenary, design, fidelity, deviations)
+    reason = static.infeasibility() or buildability_violation(static, buildability)
     if reason:
         raise ValueError(f"design is infeasible: {reason}")
     return run_passage(static, pantograph, speed, fidelity, force, progress=progress)
@@ -323,18 +383,23 @@ def evaluate(
     speed: float,
     fidelity: Fidelity,
     uplift_force: float | None = None,
+    buildability: BuildabilityLimits = NO_LIMITS,
+    deviations: SectionDeviations | None = None,
 ) -> Evaluation:
     """Simulate one design at one speed (m/s) and return its feasibility and statistics.
 
     Bad input raises :class:`DesignError` before any solve; an infeasible design (static: compressed
-    dropper, negative dropper length, or a shape-finding that does not converge; dynamic: contact
-    loss in the analysis section) returns ``feasible=False`` with the reason.
+    dropper, negative dropper length, or a shape-finding that does not converge; a buildability limit
+    violated, ``"buildability: ..."``; dynamic: contact loss in the analysis section) returns
+    ``feasible=False`` with the reason. ``deviations`` are the installation deviations of every span
+    (docs/acceptance.md, 'Installation tolerances'; None: the design as drawn).
     """
     check_speed(catenary, speed)
     force = check_uplift(pantograph, uplift_force)
     check_design(catenary, design)
     check_fidelity(catenary, fidelity)
-    return evaluate_unchecked(catenary, pantograph, design, speed, fidelity, force)
+    check_section_deviations(catenary, design, fidelity, deviations)
+    return evaluate_unchecked(catenary, pantograph, design, speed, fidelity, force, buildability, deviations)
 
 
 @single_threaded
@@ -345,6 +410,8 @@ def evaluate_unchecked(
     speed: float,
     fidelity: Fidelity,
     uplift_force: float,
+    buildability: BuildabilityLimits = NO_LIMITS,
+    deviations: SectionDeviations | None = None,
 ) -> Evaluation:
     """:func:`evaluate` without its input checks, for a caller that has made them (a design problem).
 
@@ -355,11 +422,11 @@ def evaluate_unchecked(
     start = time.perf_counter()
     force = uplift_force  # N, checked by the caller
     try:
-        static = _find_static(catenary, design, fidelity)
+        static = _find_static(catenary, design, fidelity, deviations)
     except ShapeFindingError as error:
         return Evaluation(False, f"static: {error}", None, (), (), force, time.perf_counter() - start)
     lengths, forces = _central_span(static, design)
-    reason = static.infeasibility()
+    reason = static.infeasibility() or buildability_violation(static, buildability)
     if reason:
         return Evaluation(False, reason, None, lengths, forces, force, time.perf_counter() - start)
     sim = run_passage(static, pantograph, speed, fidelity, force, statistics_only=True)
@@ -369,8 +436,9 @@ def evaluate_unchecked(
             f"dynamic: contact lost {stats.contact_loss_percent:.3f} % of the time in the analysis section"
         )
     position, filtered = _trace(sim)
+    elapsed = time.perf_counter() - start
     return Evaluation(
-        not reason, reason, stats, lengths, forces, force, time.perf_counter() - start, position, filtered
+        not reason, reason, stats, lengths, forces, force, elapsed, position, filtered, sim.acceptance
     )
 
 

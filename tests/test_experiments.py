@@ -77,7 +77,16 @@ def test_presag_report_finds_the_best_feasible_presag(tmp_path):
 
 
 @pytest.mark.parametrize(
-    "module", ["ablation", "design_studies", "optimizer_comparison", "presag", "rl_studies", "rl_amortised"]
+    "module",
+    [
+        "ablation",
+        "design_studies",
+        "optimizer_comparison",
+        "presag",
+        "rl_studies",
+        "rl_amortised",
+        "tolerance",
+    ],
 )
 @pytest.mark.parametrize("workers", ["0", "-2", "two"])
 def test_a_study_refuses_a_worker_count_before_simulating(module, workers, capsys, monkeypatch):

@@ -4,6 +4,7 @@
     catenary simulate PRESET --speed KMH [...] [--json] [--plot FILE]
     catenary validate [--json]
     catenary evaluate PROBLEM --x V1 V2 ... [--speed KMH] [--json]
+    catenary tolerance PROBLEM [--x V1 V2 ...] [--height M] [--position M] [--draws N] [--seed S] [--json]
     catenary optimize PROBLEM --optimizer NAME --budget N --seed S [...]
     catenary propose POLICY --speed KMH [--no-evaluate]
     catenary runs [--store PATH]
@@ -40,7 +41,7 @@ CORE_COMMANDS = ("static", "simulate", "validate", "presets")
 """The simulator's own commands, each a module of this package with ``add_parser(subparsers)`` and
 ``run(args)``."""
 
-EDGE_COMMANDS = ("evaluate",)
+EDGE_COMMANDS = ("evaluate", "tolerance")
 """Commands of this package on the design problems, built with the plug-ins' (they import the simulator)."""
 
 

@@ -10,17 +10,19 @@ contact wire 5 mm lower, at 300 km/h. ``--json`` prints one JSON object instead 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 from typing import Any
 
 import numpy as np
 
-from ..analysis.statistics import STATISTICS_UNITS, ContactStatistics
+from ..analysis.statistics import STATISTICS_UNITS
 from ..errors import UsageError
 from ..model.design import check_speed
 from ..pipeline import FIDELITIES, Evaluation
 from ..problems import PROBLEMS, DesignProblem
+from . import options
 
 
 def add_parser(subparsers: Any) -> None:
@@ -54,25 +56,32 @@ def add_parser(subparsers: Any) -> None:
         help="model size: study (20 spans, the design setting; default) or test (5 spans, coarse "
         "mesh; for quick checks, not for design conclusions)",
     )
+    options.add_buildability_argument(parser)
+    options.add_acceptance_argument(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
 
 
 def run(args: argparse.Namespace) -> int:
     """Evaluate the design and print it (feasible or not); 0. Bad variables or speed are refused before any
     solve."""
-    problem = PROBLEMS[args.problem]
-    x = _checked_variables(problem, list(args.x))
+    from ..model.buildability import buildability_named
+
+    problem = PROBLEMS[args.problem].with_options(buildability=buildability_named(args.buildability))
+    x = checked_variables(problem, list(args.x))
     check_speed(problem.catenary_definition, args.speed / 3.6)
+    limits = options.acceptance_limits(args)  # a bad file is refused before any solve
     evaluation = problem.evaluate(x, args.speed, args.fidelity)
+    acceptance = options.reassessed(limits, evaluation.statistics, args.speed, evaluation.acceptance)
+    evaluation = dataclasses.replace(evaluation, acceptance=acceptance)
     record = _record(problem, x, list(args.x), args.speed, args.fidelity, evaluation)
     if args.json:
-        print(json.dumps(_finite_or_null(record), allow_nan=False))
+        print(json.dumps(finite_or_null(record), allow_nan=False))
     else:
-        print(_table(record, evaluation.statistics))
+        print(_table(record, evaluation))
     return 0
 
 
-def _checked_variables(problem: DesignProblem, values: list[float]) -> np.ndarray:
+def checked_variables(problem: DesignProblem, values: list[float]) -> np.ndarray:
     bounds = ", ".join(
         f"{n} in [{lo:g}, {hi:g}] m"
         for n, lo, hi in zip(problem.variables, problem.lower, problem.upper, strict=True)
@@ -105,6 +114,7 @@ def _record(
         "feasible": evaluation.feasible,
         "reason": evaluation.reason,
         "statistics": statistics,
+        "acceptance": evaluation.acceptance.as_dict() if evaluation.acceptance is not None else None,
         "uplift_force": evaluation.uplift_force,
         "dropper_lengths": list(evaluation.dropper_lengths),
         "dropper_forces": list(evaluation.dropper_forces),
@@ -123,18 +133,19 @@ UNITS = {
 """Units of the numbers in ``catenary evaluate --json`` (SI; the table shows the support uplift in mm)."""
 
 
-def _finite_or_null(value: Any) -> Any:
+def finite_or_null(value: Any) -> Any:
     # JSON has no NaN or infinity: write null, as most JSON readers expect.
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if isinstance(value, dict):
-        return {k: _finite_or_null(v) for k, v in value.items()}
+        return {k: finite_or_null(v) for k, v in value.items()}
     if isinstance(value, list):
-        return [_finite_or_null(v) for v in value]
+        return [finite_or_null(v) for v in value]
     return value
 
 
-def _table(record: dict[str, Any], statistics: ContactStatistics | None) -> str:
+def _table(record: dict[str, Any], evaluation: Evaluation) -> str:
+    statistics = evaluation.statistics
     lines = [f"problem {record['problem']} at {record['speed_kmh']:g} km/h ({record['fidelity']} fidelity)"]
     lines += [f"  {name:<8} = {value:.3f} m" for name, value in record["variables"].items()]
     if record["rounded_to_grid"]:
@@ -143,5 +154,7 @@ def _table(record: dict[str, Any], statistics: ContactStatistics | None) -> str:
     lines.append(f"  {'pantograph uplift force':<26} {record['uplift_force']:10.2f} N")
     if statistics is not None:
         lines += statistics.text_lines()
+    if evaluation.acceptance is not None:
+        lines += evaluation.acceptance.text_lines()
     lines.append(f"  {'wall time':<26} {record['wall_time']:10.2f} s")
     return "\n".join(lines)

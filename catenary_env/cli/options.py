@@ -7,6 +7,7 @@ import argparse
 import contextlib
 import dataclasses
 import sys
+import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -115,15 +116,25 @@ def fidelity(catenary: CatenaryDefinition, args: argparse.Namespace) -> Fidelity
 
 
 def catenary_of(name: str) -> CatenaryDefinition:
-    """The catenary preset or file; a pantograph file given in its place is named as such."""
+    """The catenary preset or file; a pantograph file given in its place is named as such. A field outside
+    its usual range is warned about (docs/model.md, 'Plausible ranges')."""
     hint = "is a pantograph file, not a catenary; give a catenary here, and this one with --pantograph"
-    return _load(load_catenary, load_pantograph, name, "", hint)
+    return _warn_unusual(_load(load_catenary, load_pantograph, name, "", hint))
 
 
 def pantograph_of(name: str) -> PantographDefinition:
     """The pantograph preset or file; a catenary file given in its place is named as such."""
     hint = "is a catenary file, not a pantograph; give it as the PRESET argument, and a pantograph here"
-    return _load(load_pantograph, load_catenary, name, "--pantograph ", hint)
+    return _warn_unusual(_load(load_pantograph, load_catenary, name, "--pantograph ", hint))
+
+
+def _warn_unusual(definition: Any) -> Any:
+    from ..model.plausibility import definition_warnings
+
+    kind = "catenary" if isinstance(definition, CatenaryDefinition) else "pantograph"
+    for message in definition_warnings(f"{kind} '{definition.name}'", definition):
+        warnings.warn(message, stacklevel=2)
+    return definition
 
 
 def _load(
@@ -171,16 +182,72 @@ def design_options(args: argparse.Namespace | None) -> str:
 
 @contextlib.contextmanager
 def static_shape_of(args: argparse.Namespace | None) -> Iterator[None]:
-    """Name the design options when the catenary finds no static shape for them."""
+    """Name the real cause when the catenary finds no static shape: the design options where some were given,
+    the catenary's own data where none was (its level wire has no equilibrium)."""
     from ..statics.shape_finding import ShapeFindingError
 
     try:
         yield
     except ShapeFindingError as error:
+        given = args is not None and any(
+            getattr(args, name, None) is not None for name in ("presag", "offsets", "droppers")
+        )
+        advice = (
+            "give a smaller pre-sag or smaller offsets (a few centimetres)"
+            if given
+            else "no design option was given, so the catenary's own data are the cause: check the wires' "
+            "tensions and masses, the system height and the span length against docs/model.md, "
+            "'Plausible ranges'"
+        )
         raise UsageError(
             f"{design_options(args)}: the catenary finds no static equilibrium for this design ({error}); "
-            "give a smaller pre-sag or smaller offsets (a few centimetres)"
+            f"{advice}"
         ) from error
+
+
+def add_buildability_argument(parser: argparse.ArgumentParser) -> None:
+    """``--buildability {none,default}``: limits checked with the static verdict (docs/acceptance.md)."""
+    parser.add_argument(
+        "--buildability",
+        choices=("none", "default"),
+        default="none",
+        help="buildability limits checked with the static verdict (docs/acceptance.md): none (default, the "
+        "reference study's setting) or the documented defaults (dropper force >= 30 N, length >= 0.5 m, "
+        "spacing <= 11 m)",
+    )
+
+
+def add_acceptance_argument(parser: argparse.ArgumentParser) -> None:
+    """``--acceptance FILE``: acceptance limits of the acceptance block (docs/acceptance.md)."""
+    parser.add_argument(
+        "--acceptance",
+        metavar="FILE",
+        help="acceptance limits: a preset name or an edited copy of it (.toml; default en50367-ac, the "
+        "EN 50367 criteria for AC lines; docs/acceptance.md)",
+    )
+
+
+def acceptance_limits(args: argparse.Namespace) -> Any:
+    """The ``--acceptance`` limits, loaded and checked (before any solve), or None for the default."""
+    from ..model.presets import load_acceptance
+
+    name = getattr(args, "acceptance", None)
+    return None if name is None else load_acceptance(name)
+
+
+def reassessed(limits: Any, statistics: Any, speed_kmh: float, default: Any) -> Any:
+    """The acceptance block of ``statistics`` under ``limits``; ``default`` (the pipeline's) without them."""
+    from ..analysis.acceptance import assess
+
+    return default if limits is None or statistics is None else assess(statistics, speed_kmh, limits)
+
+
+def buildability_violation_of(static: Any, args: argparse.Namespace) -> str:
+    """The static state's violation of the ``--buildability`` limits, or an empty string."""
+    from ..analysis.buildability import buildability_violation
+    from ..model.buildability import buildability_named
+
+    return buildability_violation(static, buildability_named(getattr(args, "buildability", "none")))
 
 
 def save_figure(fig: Any, path: str) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -50,6 +51,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "(default: EN 50367, 0.00097 v² + 70 with v in km/h)",
     )
     options.add_design_arguments(p)
+    options.add_buildability_argument(p)
+    options.add_acceptance_argument(p)
     options.add_fidelity_arguments(p)
     options.add_output_arguments(p, "the contact force (N) along the track (m)")
 
@@ -64,6 +67,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--target-mean {args.target_mean}: must be a mean contact force > 0 N")
     catenary = options.catenary_of(args.preset)
     pantograph = options.pantograph_of(args.pantograph or catenary.pantograph)
+    limits = options.acceptance_limits(args)
     design = options.design(catenary, args)
     fidelity = options.fidelity(catenary, args)
     speed = args.speed / 3.6
@@ -78,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     with options.static_shape_of(args):
         static = solve_static(catenary, design, fidelity)
-    reason = static.infeasibility()
+    reason = static.infeasibility() or options.buildability_violation_of(static, args)
     if reason:
         raise UsageError(f"{options.design_options(args)}: the design is statically infeasible: {reason}")
     times = {"shape_time": time.perf_counter() - start, "calibration_time": 0.0}
@@ -90,6 +94,9 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     sim = run_passage(static, pantograph, speed, fidelity, uplift, progress=progress.fraction)
     progress.finish()
+    sim = dataclasses.replace(
+        sim, acceptance=options.reassessed(limits, sim.statistics, args.speed, sim.acceptance)
+    )
     times["passage_time"] = time.perf_counter() - start
     result = _record(args, catenary, pantograph, fidelity, sim, calibrate, times)
     print(json.dumps(result, indent=2) if args.json else _text(result, args, sim))
@@ -134,6 +141,7 @@ def _record(
         "n_spans": fidelity.n_spans,
         "analysis_window": list(sim.window),
         "statistics": stats,
+        "acceptance": sim.acceptance.as_dict() if sim.acceptance is not None else None,
         "feasible": stats["contact_loss_percent"] == 0.0,
         "wall_time": sum(times.values()),
         **times,
@@ -152,7 +160,8 @@ def _text(result: dict[str, Any], args: argparse.Namespace, sim: Any) -> str:
         f"{result['n_spans']} spans, analysis {window[0]:.0f}–{window[1]:.0f} m; {result['wall_time']:.2f} s "
         f"(shape {result['shape_time']:.2f} s{calibration}, passage {result['passage_time']:.2f} s)"
     )
-    return "\n".join([head, *sim.statistics.text_lines()])
+    acceptance = sim.acceptance.text_lines() if sim.acceptance is not None else []
+    return "\n".join([head, *sim.statistics.text_lines(), *acceptance])
 
 
 def _figure(sim: Any, name: str, speed_kmh: float, path: str) -> None:

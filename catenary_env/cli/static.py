@@ -40,6 +40,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("static", help="shape-finding and static analysis of a catenary design")
     options.add_catenary_argument(p)
     options.add_design_arguments(p)
+    options.add_buildability_argument(p)
     options.add_fidelity_arguments(p)
     p.add_argument(
         "--stiffness", action="store_true", help="also compute the stiffness profile at 100 N and 200 N"
@@ -76,7 +77,8 @@ def run(args: argparse.Namespace) -> int:
             profiles.append(stiffness_profile(static, force, args.points))
             progress.update(len(profiles))
         progress.finish()
-    result = _record(catenary.name, design, static, profiles, elapsed)
+    reason = static.infeasibility() or options.buildability_violation_of(static, args)
+    result = _record(catenary.name, design, static, profiles, elapsed, reason)
     print(json.dumps(result, indent=2) if args.json else _text(result, design, profiles))
     if args.plot:
         _figure(catenary.name, static, profiles, args.plot)
@@ -84,7 +86,12 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _record(
-    name: str, design: Design, static: StaticSolution, profiles: list[StiffnessProfile], elapsed: float
+    name: str,
+    design: Design,
+    static: StaticSolution,
+    profiles: list[StiffnessProfile],
+    elapsed: float,
+    reason: str,
 ) -> dict[str, Any]:
     """The result as the JSON object of ``--json`` (SI units, :data:`UNITS`)."""
     lay = static.layout
@@ -96,8 +103,8 @@ def _record(
             "contact_wire_offsets": list(design.contact_wire_offsets),
         },
         "n_spans": lay.n_spans,
-        "feasible": not static.infeasibility(),
-        "reason": static.infeasibility(),
+        "feasible": not reason,
+        "reason": reason,
         "dropper_lengths": static.dropper_lengths[central].tolist(),
         "dropper_forces": static.dropper_forces[central].tolist(),
         "wire_tension_range": {

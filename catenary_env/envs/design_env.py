@@ -15,15 +15,21 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..analysis.statistics import ContactStatistics
 from ..calibration_cache import quiet_calibrations
+from ..model.buildability import BuildabilityLimits, buildability_named
 from ..model.definition import CatenaryDefinition
 from ..model.design import Design, check_speed, physical_warnings
 from ..pipeline import Evaluation, Fidelity, en50367_mean_force
 from ..problems import DesignProblem, get_problem, resolve_fidelity
 from ..problems.speeds import SpeedsEvaluation, evaluate_over_speeds
+from ..problems.tolerance import RobustObjective
 from .vector_options import VECTOR_KWARGS
 
-OBJECTIVES = ("sigma", "mean_sigma_over_speeds", "worst_sigma_over_speeds")
-"""Objective names: σ at one speed, the mean of σ over ``speeds_kmh``, the largest σ over ``speeds_kmh``."""
+OBJECTIVES = ("sigma", "mean_sigma_over_speeds", "worst_sigma_over_speeds", "robust")
+"""Objective names: σ at one speed, the mean of σ over ``speeds_kmh``, the largest σ over ``speeds_kmh``,
+the mean (or a quantile) of σ at one speed over seeded installation-tolerance draws (``robust``)."""
+
+SINGLE_SPEED = ("sigma", "robust")
+"""The objectives at one speed (``speed_kmh`` or ``speed_range``)."""
 
 INFEASIBLE_SIGMA_OVER_MEAN = 1.0
 """An infeasible design scores as if σ equalled the EN 50367 mean force Fm (σ / Fm = 1).
@@ -112,7 +118,10 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     `std`, `std_over_mean`,
     `statistical_max`, `statistical_min`, `actual_max`, `actual_min` in N, `contact_loss_percent` in %,
     `max_support_uplift` in m; absent when the design was not simulated dynamically),
-    `uplift_force` (N), `dropper_lengths` (m) and `dropper_forces` (N) of a central span,
+    `acceptance` (the EN 50367 acceptance block, :class:`~catenary_env.analysis.acceptance.Acceptance`:
+    each criterion's limit, value, verdict and source tag; docs/acceptance.md) and `acceptance_passed` (bool;
+    both absent where the statistics are), `uplift_force` (N), `dropper_lengths` (m) and `dropper_forces` (N)
+    of a central span,
     `wall_time` (s, of the simulations behind the result) and `clipped` (bool). With a multi-speed
     objective, `speed_kmh`, the statistics and `uplift_force` are arrays over `speeds_kmh`; a design is
     not simulated at the speeds after the first at which it is infeasible (the statistics are then absent,
@@ -137,6 +146,16 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     - `objective="sigma"`: or `"mean_sigma_over_speeds"`, `"worst_sigma_over_speeds"` with `speeds_kmh`.
     - `speeds_kmh=None`: speeds of a multi-speed objective, km/h.
     - `normalize_reward=False`: divide the reward by the reference design's objective.
+    - `buildability=None`: limits a design must meet at equilibrium, before any dynamics (docs/acceptance.md,
+      'Buildability limits'): `None` or `"none"` (the reference study's setting), `"default"` (dropper force
+      >= 30 N, dropper length >= 0.5 m, dropper spacing <= 11 m) or a
+      :class:`~catenary_env.model.buildability.BuildabilityLimits`. A design violating one is infeasible,
+      with `info["reason"]` starting `"buildability:"`.
+    - `robust=None`: with `objective="robust"`, a :class:`~catenary_env.problems.tolerance.RobustObjective`
+      (default: 8 draws of seed 0 of the practice tolerances, their mean σ). The same draws serve every
+      design of the env; the statistics in `info` are each statistic's mean (or quantile) over the draws,
+      and a design is infeasible where any draw is. `normalize_reward` divides by the reference design's
+      σ as drawn.
     - `render_mode=None`: or `"rgb_array"`, a picture of the last design (the reference design before
       the first step) with its statistics.
     - `vector_kwargs`: registered for `gymnasium.make_vec` (same-step autoreset), which reads it;
@@ -172,13 +191,15 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         normalize_reward: bool = False,
         render_mode: str | None = None,
         vector_kwargs: dict[str, Any] | None = None,
+        buildability: str | BuildabilityLimits | None = None,
+        robust: RobustObjective | None = None,
     ) -> None:
         if vector_kwargs is not None and vector_kwargs != VECTOR_KWARGS:
             raise ValueError(
                 f"vector_kwargs = {vector_kwargs!r}: an option of gymnasium.make_vec, registered as "
                 f"{VECTOR_KWARGS!r}; a design env takes no other"
             )
-        self.problem: DesignProblem = get_problem(problem)
+        self.problem: DesignProblem = _with_options(get_problem(problem), objective, buildability, robust)
         self.fidelity: Fidelity = resolve_fidelity(fidelity, n_spans)
         self.objective = objective
         self.normalize_reward = bool(normalize_reward)
@@ -209,8 +230,8 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         super().reset(seed=seed)
         if options and "speed_kmh" in options:
-            if self.objective != "sigma":
-                raise ValueError("options['speed_kmh'] is only for objective='sigma'")
+            if self.objective not in SINGLE_SPEED:
+                raise ValueError("options['speed_kmh'] is only for objective='sigma' or 'robust'")
             speed = float(options["speed_kmh"])
             _check_speed(self.problem.catenary_definition, speed)
             self._speeds = (speed,)
@@ -323,6 +344,11 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         info["uplift_force"] = (
             uplift[0] if single else np.array(uplift + [math.nan] * (len(self._speeds) - len(uplift)))
         )
+        acceptance = [e.acceptance for e in evaluations]
+        if len(acceptance) == len(self._speeds) and all(a is not None for a in acceptance):
+            info["acceptance"] = acceptance[0] if single else tuple(acceptance)
+            passed = [a.passed for a in acceptance if a is not None]
+            info["acceptance_passed"] = passed[0] if single else np.array(passed)
         info["dropper_lengths"] = tuple(evaluations[0].dropper_lengths)
         info["dropper_forces"] = tuple(evaluations[0].dropper_forces)
         info["wall_time"] = result.wall_time
@@ -350,6 +376,27 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         return ", ".join(f"{v:g}" for v in self._speeds) + " km/h"
 
 
+def _with_options(
+    problem: DesignProblem,
+    objective: str,
+    buildability: str | BuildabilityLimits | None,
+    robust: RobustObjective | None,
+) -> DesignProblem:
+    """The env's problem: with its buildability limits, and the robust objective where asked."""
+    if robust is not None and objective != "robust":
+        raise ValueError(f"robust = {robust!r}: only with objective='robust'")
+    if robust is not None and not isinstance(robust, RobustObjective):
+        raise ValueError(f"robust = {robust!r}: must be a RobustObjective")
+    limits = (
+        buildability_named(buildability or "none")
+        if not isinstance(buildability, BuildabilityLimits)
+        else buildability
+    )
+    if objective == "robust":
+        return problem.with_options(limits, robust or RobustObjective())
+    return problem.with_options(limits)
+
+
 DEFAULT_SPEED_KMH = 300.0
 """The train speed of an env given no speed, km/h."""
 
@@ -369,7 +416,7 @@ def _speed_setting(
             f"speed_kmh = {speed_kmh!r} and speed_range = {speed_range!r}: give one, the speed or the range "
             "drawn from at each reset"
         )
-    if objective != "sigma":
+    if objective not in SINGLE_SPEED:
         if speed_range is not None:
             raise ValueError(f"speed_range cannot be combined with objective={objective!r}; give speeds_kmh")
         if speed_kmh is not None:

@@ -32,6 +32,7 @@ import numpy as np
 
 from ..model.definition import CatenaryDefinition
 from ..model.design import Design
+from ..model.tolerances import SectionDeviations
 
 BENDING_LAYER = (0.5, 1.0, 2.0, 4.0)
 """Distances from an interior support, in bending lengths √(EI/T), of the nodes that resolve a continuous
@@ -190,8 +191,13 @@ def build_layout(
     n_spans: int,
     contact_wire_element: float,
     messenger_wire_element: float,
+    deviations: SectionDeviations | None = None,
 ) -> Layout:
-    """Discretise ``n_spans`` spans of ``catenary`` carrying ``design`` (see module docstring)."""
+    """Discretise ``n_spans`` spans of ``catenary`` carrying ``design`` (see module docstring).
+
+    ``deviations`` (installation tolerances, per span and dropper) move each dropper and its contact-wire
+    height; the spans are then no longer equal.
+    """
     c = catenary
     L = c.span_length
     stitch = c.stitch_wire
@@ -199,7 +205,8 @@ def build_layout(
     support_x = np.arange(n_spans + 1) * L
     d = np.asarray(design.dropper_positions)
     n_d = d.size
-    dropper_x = (support_x[:-1, None] + d[None, :]).ravel()
+    shift = np.zeros((n_spans, d.size)) if deviations is None else deviations.position
+    dropper_x = (support_x[:-1, None] + d[None, :] + shift).ravel()
     dropper_span = np.repeat(np.arange(n_spans), n_d)
     dropper_index = np.tile(np.arange(n_d), n_spans)
     # A dropper hangs from the stitch wire when it is the first one after (or the last one before)
@@ -214,7 +221,7 @@ def build_layout(
     cw_points = _subdivide(np.r_[support_x, dropper_x], contact_wire_element)
     mw_keys = np.r_[support_x, dropper_x[~on_stitch]]
     if c.modelling.messenger_support == "continuous":
-        room = min(d[0], L - d[-1]) if d.size else L
+        room = min(d[0], L - d[-1]) - np.max(np.abs(shift), initial=0.0) if d.size else L
         mw_keys = np.r_[mw_keys, _bending_layer(interior, c, room)]
     if stitch is not None:
         mw_keys = np.r_[mw_keys, (interior[:, None] + [-half, half]).ravel()]
@@ -265,8 +272,8 @@ def build_layout(
     if stitch is not None:
         chain = np.c_[
             _find(node_x, mw_nodes, interior - half),
-            _find(node_x, st_nodes, interior - L + d[-1]),
-            _find(node_x, st_nodes, interior + d[0]),
+            _find(node_x, st_nodes, dropper_x.reshape(n_spans, n_d)[:-1, -1]),
+            _find(node_x, st_nodes, dropper_x.reshape(n_spans, n_d)[1:, 0]),
             _find(node_x, mw_nodes, interior + half),
         ]
         stitch_nodes = np.stack([chain[:, :-1], chain[:, 1:]], axis=2).reshape(-1, 2)
@@ -322,7 +329,9 @@ def build_layout(
         dropper_bars=drop,
         dropper_span=dropper_span,
         dropper_index=dropper_index,
-        dropper_height=c.contact_wire_height + np.tile(np.asarray(design.contact_wire_offsets), n_spans),
+        dropper_height=c.contact_wire_height
+        + np.tile(np.asarray(design.contact_wire_offsets), n_spans)
+        + (0.0 if deviations is None else deviations.height.ravel()),
         stitch_bars=stitch_bars,
         support_x=support_x,
         messenger_supports=mw_supports,

@@ -15,15 +15,20 @@ from dataclasses import dataclass, field
 
 from ..errors import CatenaryError
 from .options import CHOICES, ModellingOptions
+from .plausibility import implausibility, physical_fields
 
 
 class DefinitionError(CatenaryError, ValueError):
     """An invalid catenary or pantograph definition; the message names the field and the allowed range."""
 
 
-MAX_SPAN_LENGTH = 500.0
-"""Longest span accepted, m: far above any overhead line (EN 50119 spans are 30 to 80 m), low enough that a
-mistyped length is named as such rather than as asymmetric droppers."""
+def check_plausible_fields(where: str, record: object) -> None:
+    """Refuse the first numeric field of a definition outside its plausible range (docs/model.md, 'Plausible
+    ranges'), naming the field and the unit the value looks like."""
+    for w, name, value in physical_fields(where, record):
+        problem = implausibility(w, name, value)
+        if problem is not None:
+            raise DefinitionError(problem)
 
 
 def _check_positive(where: str, name: str, value: float, allow_zero: bool = False) -> None:
@@ -264,11 +269,6 @@ class CatenaryDefinition:
                 f"{where}.modelling.{name} = {value!r}: must be one of {', '.join(map(repr, CHOICES[name]))}"
             )
         _check_positive(where, "span_length", self.span_length)
-        if self.span_length > MAX_SPAN_LENGTH:
-            raise DefinitionError(
-                f"{where}.span_length = {self.span_length!r}: must be at most {MAX_SPAN_LENGTH:g} m "
-                "(the spans of overhead lines are 30 to 80 m)"
-            )
         _check_positive(where, "system_height", self.system_height)
         _check_positive(where, "contact_wire_height", self.contact_wire_height)
         _check_positive(where, "contact_stiffness", self.contact_stiffness)
@@ -279,6 +279,8 @@ class CatenaryDefinition:
         self.dropper.validate(f"{where}.dropper")
         self.supports.validate(f"{where}.supports")
         self.damping.validate(f"{where}.damping")
+        # Before the droppers: a span typed in millimetres is named as such, not as droppers out of the span.
+        check_plausible_fields(where, self)
         check_dropper_positions(self.dropper_positions, self.span_length, f"{where}.dropper_positions")
         if self.stitch_wire is not None:
             check_stitch_reach(self.dropper_positions, self.stitch_wire.length, self.span_length, where)
@@ -384,3 +386,4 @@ class PantographDefinition:
             _check_positive(where, f"dampings[{i}]", c, allow_zero=True)
         if self.uplift_force is not None:
             _check_positive(where, "uplift_force", self.uplift_force)
+        check_plausible_fields(where, self)

@@ -29,6 +29,7 @@ Examples
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -36,11 +37,21 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import pipeline
 from ..fingerprint import model_fingerprint
+from ..model.buildability import NO_LIMITS, BuildabilityLimits
 from ..model.definition import CatenaryDefinition, PantographDefinition
 from ..model.design import Design, DesignError, check_design, check_speed, presag_design, symmetric_design
-from ..pipeline import FIDELITIES, Evaluation, Fidelity, check_fidelity, check_uplift
+from ..model.tolerances import SectionDeviations, Tolerances
+from ..pipeline import (
+    FIDELITIES,
+    Evaluation,
+    Fidelity,
+    check_fidelity,
+    check_section_deviations,
+    check_uplift,
+)
 from .grid import DesignGrid
 from .reference import calibrated_uplift, preset_catenary, preset_pantograph, reference_evaluation
+from .tolerance import RobustObjective, ToleranceEvaluation, evaluate_under_tolerances, robust_evaluation
 
 __all__ = ["DesignProblem", "resolve_fidelity"]
 
@@ -71,6 +82,13 @@ class DesignProblem:
         One paragraph for humans.
     grid : DesignGrid
         The variables' grid, set from the bounds and steps: snapping, actions, cache keys.
+    buildability : BuildabilityLimits
+        Limits a design must meet with its static state, before any dynamics (docs/acceptance.md,
+        'Buildability limits'); default :data:`~catenary_env.model.buildability.NO_LIMITS`, the reference
+        study's setting. ``problem.with_options(buildability=DEFAULT_BUILDABILITY)`` applies the defaults.
+    robust : RobustObjective or None
+        With it, :meth:`evaluate` returns the robust objective's evaluation: σ over seeded tolerance draws
+        (:func:`~catenary_env.problems.tolerance.robust_evaluation`); None: the design as drawn.
     """
 
     name: str
@@ -83,6 +101,8 @@ class DesignProblem:
     step: NDArray[np.float64]
     description: str
     grid: DesignGrid = field(init=False, repr=False)
+    buildability: BuildabilityLimits = NO_LIMITS
+    robust: RobustObjective | None = None
 
     def __post_init__(self) -> None:
         n = len(self.variables)
@@ -244,7 +264,11 @@ class DesignProblem:
         )
 
     def fingerprint(self) -> str:
-        """Hash of the catenary, pantograph and variables: results are reusable only under the same one."""
+        """Hash of the catenary, pantograph and variables (and of the buildability limits and the robust
+        objective where set): results are reusable only under the same one."""
+        options = [] if self.buildability == NO_LIMITS else [dataclasses.asdict(self.buildability)]
+        if self.robust is not None:
+            options.append(repr(self.robust))
         return model_fingerprint(
             self.catenary_definition,
             self.pantograph_definition,
@@ -252,6 +276,17 @@ class DesignProblem:
             self.lower.tolist(),
             self.upper.tolist(),
             self.step.tolist(),
+            *options,
+        )
+
+    def with_options(
+        self, buildability: BuildabilityLimits | None = None, robust: RobustObjective | None = None
+    ) -> DesignProblem:
+        """The same problem with buildability limits and (or) the robust objective."""
+        return dataclasses.replace(
+            self,
+            buildability=self.buildability if buildability is None else buildability,
+            robust=self.robust if robust is None else robust,
         )
 
     def store_fingerprint(self) -> str:
@@ -274,8 +309,10 @@ class DesignProblem:
         speed_kmh: float = 300.0,
         fidelity: str | Fidelity = "study",
         uplift_force: float | None = None,
+        deviations: SectionDeviations | None = None,
     ) -> Evaluation:
-        """Simulate the design of ``x`` at a speed.
+        """Simulate the design of ``x`` at a speed, under the problem's :attr:`buildability` limits; with
+        :attr:`robust`, the robust objective's evaluation (docs/acceptance.md).
 
         Parameters
         ----------
@@ -288,6 +325,8 @@ class DesignProblem:
         uplift_force : float, optional
             Pantograph uplift force, N. Default: the problem's, :meth:`uplift_force` (pass it to spare
             worker processes their own calibration).
+        deviations : SectionDeviations, optional
+            Installation deviations of every span (not with :attr:`robust`, which draws its own).
 
         Returns
         -------
@@ -302,6 +341,14 @@ class DesignProblem:
             ``x`` of the wrong shape, not finite, or outside the bounds; a speed outside (0, wave speed).
         """
         # The boundary: every input is checked here once, then the pipeline's unchecked core runs.
+        if self.robust is not None:
+            if deviations is not None:
+                raise ValueError("deviations: a robust problem draws its own; give none")
+            robust = self.robust
+            result = self.evaluate_tolerances(
+                x, robust.tolerances, robust.draws, robust.seed, speed_kmh, fidelity, uplift_force
+            )
+            return robust_evaluation(result, robust, float(speed_kmh))
         design = self.design(x)
         resolved = resolve_fidelity(fidelity)
         catenary = self.catenary_definition
@@ -310,12 +357,43 @@ class DesignProblem:
         force = self.uplift_force(speed_kmh, resolved) if uplift_force is None else float(uplift_force)
         try:
             check_design(catenary, design)
+            check_section_deviations(catenary, design, resolved, deviations)
         except DesignError as error:
             return Evaluation(False, f"design: {error}", None, (), (), force, 0.0)
         pantograph = self.pantograph_definition
         check_uplift(pantograph, force)
         check_fidelity(catenary, resolved)
-        return pipeline.evaluate_unchecked(catenary, pantograph, design, speed, resolved, force)
+        return pipeline.evaluate_unchecked(
+            catenary, pantograph, design, speed, resolved, force, self.buildability, deviations
+        )
+
+    def evaluate_tolerances(
+        self,
+        x: ArrayLike,
+        tolerances: Tolerances,
+        draws: int,
+        seed: int = 0,
+        speed_kmh: float = 300.0,
+        fidelity: str | Fidelity = "study",
+        uplift_force: float | None = None,
+        progress: Callable[[int], None] | None = None,
+    ) -> ToleranceEvaluation:
+        """The design of ``x`` on draws 0 to ``draws - 1`` of ``seed`` of its built section
+        (docs/acceptance.md, 'Installation tolerances'): the same draws for every design of the problem
+        (common random numbers).
+
+        A draw that moves a dropper off its span or past its neighbour comes back infeasible (``"design:"``).
+        """
+        plain = dataclasses.replace(self, robust=None)
+        resolved = resolve_fidelity(fidelity)
+        force = self.uplift_force(speed_kmh, resolved) if uplift_force is None else float(uplift_force)
+
+        def one(deviations: SectionDeviations) -> Evaluation:
+            return plain.evaluate(x, speed_kmh, resolved, force, deviations)
+
+        return evaluate_under_tolerances(
+            one, tolerances, resolved.n_spans, self.n_droppers, draws, seed, progress
+        )
 
     # -- helpers ----------------------------------------------------------------------------------------
 

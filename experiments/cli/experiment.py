@@ -37,6 +37,10 @@ STUDIES = {
     "rl-amortised": Study(
         "rl_amortised", "speed-conditioned PPO and SAC policies at held-out speeds against a GA run per speed"
     ),
+    "tolerance": Study(
+        "tolerance",
+        "σ under installation tolerances, the design studies under buildability limits, robust GA",
+    ),
 }
 
 

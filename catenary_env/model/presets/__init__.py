@@ -43,10 +43,13 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, TypeVar
 
+from ..acceptance_limits import AcceptanceLimits
 from ..definition import CatenaryDefinition, DefinitionError, PantographDefinition
 
 __all__ = [
+    "acceptance_names",
     "catenary_names",
+    "load_acceptance",
     "load_catenary",
     "load_pantograph",
     "pantograph_names",
@@ -54,11 +57,11 @@ __all__ = [
 ]
 
 _ROOT = Path(__file__).parent
-_FOLDERS = {"catenary": "catenaries", "pantograph": "pantographs"}
+_FOLDERS = {"catenary": "catenaries", "pantograph": "pantographs", "acceptance": "acceptance"}
 _TAG = re.compile(r"(S\?|S|A)(:.*)?", re.DOTALL)
 _KEY_PART = re.compile(r"(\w+)(?:\[(\d+)\])?")
 
-_Record = TypeVar("_Record", CatenaryDefinition, PantographDefinition)
+_Record = TypeVar("_Record", CatenaryDefinition, PantographDefinition, AcceptanceLimits)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -75,12 +78,41 @@ def pantograph_names() -> list[str]:
     return _names("pantograph")
 
 
+def acceptance_names() -> list[str]:
+    """Names of the acceptance-limit presets shipped with the package (docs/acceptance.md), sorted."""
+    return _names("acceptance")
+
+
+def load_acceptance(name_or_path: str | os.PathLike[str] = "en50367-ac") -> AcceptanceLimits:
+    """Load and validate acceptance limits (EN 50367 criteria; docs/acceptance.md).
+
+    Parameters
+    ----------
+    name_or_path : str or path-like
+        A preset name (see :func:`acceptance_names`) or the path of a ``.toml`` file.
+
+    Raises
+    ------
+    DefinitionError
+        As :func:`load_catenary`.
+
+    Examples
+    --------
+    >>> load_acceptance().max_std_over_mean
+    0.3
+    """
+    path = _locate("acceptance", name_or_path)
+    table = _read(path)
+    with _naming(path):
+        return _build_record(AcceptanceLimits, table)
+
+
 def preset_path(kind: str, name: str) -> Path:
     """Path of a preset's TOML file, e.g. for a user to copy and edit.
 
     Parameters
     ----------
-    kind : {"catenary", "pantograph"}
+    kind : {"catenary", "pantograph", "acceptance"}
     name : str
         Preset name, e.g. ``"benchmark"``.
 
