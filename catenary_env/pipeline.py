@@ -120,6 +120,10 @@ class Evaluation:
     trace_position, trace_force : tuple of float
         The filtered contact force (N) along the analysis section (m), at most
         :data:`TRACE_POINTS` samples, for pictures; empty when no passage was simulated.
+    constraints : tuple of float
+        The values of the feasibility constraints named in :data:`CONSTRAINTS`, in that order; the design
+        is feasible when every one is <= 0 (docs/model.md, 'Statistics and feasibility'). NaN where not
+        computed: every one when shape-finding failed, the contact loss when no passage was simulated.
     """
 
     feasible: bool
@@ -131,9 +135,16 @@ class Evaluation:
     wall_time: float
     trace_position: tuple[float, ...] = ()
     trace_force: tuple[float, ...] = ()
+    constraints: tuple[float, ...] = ()
 
 
 TRACE_POINTS = 1000
+
+CONSTRAINTS = ("dropper_compression_N", "dropper_length_shortfall_m", "contact_loss_percent")
+"""The feasibility constraints of :attr:`Evaluation.constraints`, each feasible when <= 0: the largest
+compression of a dropper at equilibrium over the section (N, minus the smallest dropper force), the
+largest shortfall of an unstretched dropper length (m, minus the shortest length) and the share of the
+analysis section's time in which contact is lost (%)."""
 
 
 @dataclass(frozen=True)
@@ -357,11 +368,15 @@ def evaluate_unchecked(
     try:
         static = _find_static(catenary, design, fidelity)
     except ShapeFindingError as error:
-        return Evaluation(False, f"static: {error}", None, (), (), force, time.perf_counter() - start)
+        unknown = (math.nan,) * len(CONSTRAINTS)
+        wall_time = time.perf_counter() - start
+        return Evaluation(False, f"static: {error}", None, (), (), force, wall_time, constraints=unknown)
     lengths, forces = _central_span(static, design)
     reason = static.infeasibility()
     if reason:
-        return Evaluation(False, reason, None, lengths, forces, force, time.perf_counter() - start)
+        wall_time = time.perf_counter() - start
+        constraints = _constraints(static, math.nan)
+        return Evaluation(False, reason, None, lengths, forces, force, wall_time, constraints=constraints)
     sim = run_passage(static, pantograph, speed, fidelity, force, statistics_only=True)
     stats = sim.statistics
     if stats.contact_loss_percent > 0.0:
@@ -369,9 +384,18 @@ def evaluate_unchecked(
             f"dynamic: contact lost {stats.contact_loss_percent:.3f} % of the time in the analysis section"
         )
     position, filtered = _trace(sim)
+    constraints = _constraints(static, stats.contact_loss_percent)
+    wall_time = time.perf_counter() - start
     return Evaluation(
-        not reason, reason, stats, lengths, forces, force, time.perf_counter() - start, position, filtered
+        not reason, reason, stats, lengths, forces, force, wall_time, position, filtered, constraints
     )
+
+
+def _constraints(static: StaticSolution, contact_loss_percent: float) -> tuple[float, ...]:
+    """The values of :data:`CONSTRAINTS` (feasible when <= 0)."""
+    compression = -float(np.min(static.dropper_forces))
+    shortfall = -float(np.min(static.dropper_lengths))
+    return compression, shortfall, float(contact_loss_percent)
 
 
 def _trace(sim: Simulation) -> tuple[tuple[float, ...], tuple[float, ...]]:

@@ -79,6 +79,9 @@ class EvaluationRecord:
         Counted against the budget: the run's first evaluation of this design.
     speed_kmh : float
         Train speed, km/h.
+    constraints : tuple of float
+        The problem's constraint values (feasible when all are <= 0; NaN where not computed); empty where
+        the problem gives none, or the store that served it predates them.
     """
 
     index: int
@@ -90,6 +93,7 @@ class EvaluationRecord:
     cached: bool
     charged: bool
     speed_kmh: float
+    constraints: tuple[float, ...] = ()
 
     @property
     def loss(self) -> float:
@@ -226,8 +230,15 @@ class Optimizer(abc.ABC):
         self.num_ask += len(points)
         return self._pending.copy()
 
-    def tell(self, points: ArrayLike, losses: ArrayLike) -> None:
-        """Tell the losses of the batch last asked: σ in N, +inf for an infeasible design.
+    def tell(
+        self,
+        points: ArrayLike,
+        losses: ArrayLike,
+        constraints: Sequence[Sequence[float]] | None = None,
+    ) -> None:
+        """Tell the losses of the batch last asked: σ in N, +inf for an infeasible design; optionally the
+        constraint values of each point (:attr:`EvaluationRecord.constraints`), which a constraint-aware
+        optimiser uses (:meth:`_internal_tell_constrained`) and the others ignore.
 
         Raises
         ------
@@ -244,9 +255,14 @@ class Optimizer(abc.ABC):
             raise RuntimeError(f"{self.name}: tell exactly the batch last asked")
         if values.shape != (len(batch),) or np.any(np.isnan(values)):
             raise RuntimeError(f"{self.name}: need one loss (not NaN) per point, got {values.shape}")
+        if constraints is not None and len(constraints) != len(batch):
+            raise RuntimeError(f"{self.name}: need one tuple of constraint values per point")
         self._pending = None
         self.num_tell += len(batch)
-        self._internal_tell(batch, values)
+        if constraints is None:
+            self._internal_tell(batch, values)
+        else:
+            self._internal_tell_constrained(batch, values, tuple(tuple(map(float, c)) for c in constraints))
 
     @abc.abstractmethod
     def _internal_ask(self) -> NDArray[np.int64]:
@@ -255,6 +271,16 @@ class Optimizer(abc.ABC):
     @abc.abstractmethod
     def _internal_tell(self, points: NDArray[np.int64], losses: NDArray[np.float64]) -> None:
         """Learn from the losses of the batch last proposed (+inf: infeasible)."""
+
+    def _internal_tell_constrained(
+        self,
+        points: NDArray[np.int64],
+        losses: NDArray[np.float64],
+        constraints: tuple[tuple[float, ...], ...],
+    ) -> None:
+        """Learn from the losses and the constraint values (per point; feasible when all are <= 0, NaN
+        where not computed, empty where unknown); by default from the losses alone."""
+        self._internal_tell(points, losses)
 
 
 class OptimizerSpec(NamedTuple):

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from catenary_env.pipeline import CONSTRAINTS
 from catenary_env.problems import evaluate_problem, get_problem
 
 from .problem import Outcome, SimulateFunction
@@ -39,13 +40,17 @@ def simulate_catenary_design(
     evaluation = evaluate_problem(problem_name, tuple(x), float(speed_kmh), fidelity)
     statistics = evaluation.statistics
     sigma = None if statistics is None else float(statistics.std)
-    return Outcome(bool(evaluation.feasible), sigma, str(evaluation.reason), float(evaluation.wall_time))
+    constraints = tuple(float(v) for v in evaluation.constraints)
+    return Outcome(
+        bool(evaluation.feasible), sigma, str(evaluation.reason), float(evaluation.wall_time), constraints
+    )
 
 
 @dataclass(frozen=True, eq=False)
 class CatenaryProblem:
     """A catenary design problem (docs/problems.md) as a :class:`GridProblem` (built by
-    :func:`catenary_problem`)."""
+    :func:`catenary_problem`); its outcomes carry the constraint values of
+    :data:`catenary_env.pipeline.CONSTRAINTS`."""
 
     name: str
     variable_names: tuple[str, ...]
@@ -53,6 +58,7 @@ class CatenaryProblem:
     upper: NDArray[np.float64]
     step: NDArray[np.float64]
     model_fingerprint: str = ""
+    constraint_names: tuple[str, ...] = CONSTRAINTS
 
     @property
     def simulate(self) -> SimulateFunction:

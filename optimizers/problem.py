@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from catenary_env.problems.grid import DesignGrid
 
-__all__ = ["GridProblem", "GridSpace", "Outcome", "SimulateFunction"]
+__all__ = ["GridProblem", "GridSpace", "Outcome", "SimulateFunction", "constraint_names"]
 
 
 class Outcome(NamedTuple):
@@ -49,12 +49,16 @@ class Outcome(NamedTuple):
         Empty when feasible, otherwise why not.
     wall_time : float
         Seconds the simulation took.
+    constraints : tuple of float
+        The problem's constraint values (its ``constraint_names``), feasible when all are <= 0; NaN where
+        not computed, empty where the problem or the store that served the outcome gives none.
     """
 
     feasible: bool
     sigma: float | None
     reason: str
     wall_time: float
+    constraints: tuple[float, ...] = ()
 
 
 SimulateFunction = Callable[[tuple[float, ...], float, str], Outcome]
@@ -76,6 +80,9 @@ class GridProblem(Protocol):
         Bounds and grid step of each variable, physical units (m); the bounds lie on the grid.
     simulate : SimulateFunction
         Picklable ``simulate(x, speed_kmh, fidelity) -> Outcome``; deterministic.
+
+    A problem may also name the values of its outcomes' ``constraints`` in ``constraint_names`` (a tuple
+    of str; :func:`constraint_names` reads it, empty when absent).
     """
 
     @property
@@ -147,3 +154,8 @@ class GridSpace(DesignGrid):
                 f"grid point {index.tolist()} is not on the grid 0 <= k < {self.n_levels.tolist()}"
             )
         return self.from_index(index)
+
+
+def constraint_names(problem: GridProblem) -> tuple[str, ...]:
+    """The names of a problem's constraint values (:attr:`Outcome.constraints`), empty if it names none."""
+    return tuple(getattr(problem, "constraint_names", ()))

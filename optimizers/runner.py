@@ -152,7 +152,7 @@ def _run(engine: Optimizer, loop: _BatchEvaluator, recorder: RunRecorder, budget
             recorder.append(record)
         if len(records) < len(points):  # cut short by the budget or the cap: the batch cannot be told
             return "budget" if recorder.n_charged >= budget else "max_evaluations"
-        engine.tell(points, [record.loss for record in records])
+        engine.tell(points, [record.loss for record in records], [record.constraints for record in records])
 
 
 class _BatchEvaluator:
@@ -213,7 +213,9 @@ class _BatchEvaluator:
         stored = self.recorder.stored(index, key)
         if stored is not None:
             record = stored.record
-            self.seen.setdefault(key, Outcome(record.feasible, record.sigma, record.reason, record.wall_time))
+            r = record
+            outcome = Outcome(r.feasible, r.sigma, r.reason, r.wall_time, r.constraints)
+            self.seen.setdefault(key, outcome)
             return record, int(record.charged)
         if key in self.seen:
             return self._record(index, x, self.seen[key], cached=True, charged=False, key=key), 0
@@ -270,6 +272,7 @@ class _BatchEvaluator:
             cached=cached,
             charged=charged,
             speed_kmh=self.speed_kmh,
+            constraints=tuple(float(v) for v in outcome.constraints),
         )
         self.recorder.persist(record, key)
         return record

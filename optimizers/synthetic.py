@@ -62,6 +62,9 @@ class QuadraticProblem:
         Right-hand side of the constraint, m.
     delay : float
         Seconds each evaluation sleeps, to stand in for an expensive simulation (0 for none).
+    constraint_names : tuple of str
+        The one constraint value of an outcome: ``constraint @ x - limit``, m (feasible when <= 0, up to
+        1e-12 m of rounding).
     """
 
     name: str
@@ -76,6 +79,7 @@ class QuadraticProblem:
     constraint: NDArray[np.float64]
     limit: float
     delay: float = 0.0
+    constraint_names: tuple[str, ...] = ("constraint_excess_m",)
 
     @property
     def simulate(self) -> SimulateFunction:
@@ -119,10 +123,11 @@ def simulate_quadratic(
     if problem.delay > 0.0:
         time.sleep(problem.delay)
     values = np.asarray(x, dtype=np.float64)
+    excess = (float(values @ problem.constraint - problem.limit),)
     if not problem.feasible(values):
         reason = f"synthetic: constraint {problem.constraint.tolist()} @ x > {problem.limit} m"
-        return Outcome(False, None, reason, time.perf_counter() - start)
-    return Outcome(True, float(problem.sigma(values)), "", time.perf_counter() - start)
+        return Outcome(False, None, reason, time.perf_counter() - start, excess)
+    return Outcome(True, float(problem.sigma(values)), "", time.perf_counter() - start, excess)
 
 
 def _quadratic(name: str, delay: float) -> QuadraticProblem:

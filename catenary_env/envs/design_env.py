@@ -6,6 +6,7 @@ from __future__ import annotations
 import functools
 import math
 from collections import OrderedDict
+from collections.abc import Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -17,7 +18,7 @@ from ..analysis.statistics import ContactStatistics
 from ..calibration_cache import quiet_calibrations
 from ..model.definition import CatenaryDefinition
 from ..model.design import Design, check_speed, physical_warnings
-from ..pipeline import Evaluation, Fidelity, en50367_mean_force
+from ..pipeline import CONSTRAINTS, Evaluation, Fidelity, en50367_mean_force
 from ..problems import DesignProblem, get_problem, resolve_fidelity
 from ..problems.speeds import SpeedsEvaluation, evaluate_over_speeds
 from .vector_options import VECTOR_KWARGS
@@ -111,7 +112,10 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     `std`, `std_over_mean`,
     `statistical_max`, `statistical_min`, `actual_max`, `actual_min` in N, `contact_loss_percent` in %,
     `max_support_uplift` in m; absent when the design was not simulated dynamically),
-    `uplift_force` (N), `dropper_lengths` (m) and `dropper_forces` (N) of a central span,
+    `uplift_force` (N), `constraints` (the values of `catenary_env.pipeline.CONSTRAINTS` by name: the largest
+    dropper compression in N, the largest dropper-length shortfall in m and the contact-loss share in %;
+    feasible when all are <= 0; NaN where not computed, arrays over the speeds with a multi-speed
+    objective), `dropper_lengths` (m) and `dropper_forces` (N) of a central span,
     `wall_time` (s, of the simulations behind the result) and `clipped` (bool). With a multi-speed
     objective, `speed_kmh`, the statistics and `uplift_force` are arrays over `speeds_kmh`; a design is
     not simulated at the speeds after the first at which it is infeasible (the statistics are then absent,
@@ -317,6 +321,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         info["uplift_force"] = (
             uplift[0] if single else np.array(uplift + [math.nan] * (len(self._speeds) - len(uplift)))
         )
+        info["constraints"] = _constraint_info(evaluations, len(self._speeds))
         info["dropper_lengths"] = tuple(evaluations[0].dropper_lengths)
         info["dropper_forces"] = tuple(evaluations[0].dropper_forces)
         info["wall_time"] = result.wall_time
@@ -395,3 +400,13 @@ def _check_speed(catenary: CatenaryDefinition, speed_kmh: float) -> None:
     check_speed(catenary, speed_kmh / 3.6)
     for warning in physical_warnings(catenary, speed_kmh / 3.6, None):
         gym.logger.warn(warning)
+
+
+def _constraint_info(evaluations: Sequence[Evaluation], n_speeds: int) -> dict[str, Any]:
+    """``info["constraints"]``: each of :data:`~catenary_env.pipeline.CONSTRAINTS` by name (feasible when
+    <= 0), a float at one speed, else an array over the speeds (NaN where not simulated)."""
+    values = [tuple(e.constraints) or (math.nan,) * len(CONSTRAINTS) for e in evaluations]
+    values += [(math.nan,) * len(CONSTRAINTS)] * (n_speeds - len(values))
+    if n_speeds == 1:
+        return {name: float(values[0][i]) for i, name in enumerate(CONSTRAINTS)}
+    return {name: np.array([v[i] for v in values]) for i, name in enumerate(CONSTRAINTS)}

@@ -311,7 +311,8 @@ class DesignProblem:
         try:
             check_design(catenary, design)
         except DesignError as error:
-            return Evaluation(False, f"design: {error}", None, (), (), force, 0.0)
+            unknown = (np.nan,) * len(pipeline.CONSTRAINTS)
+            return Evaluation(False, f"design: {error}", None, (), (), force, 0.0, constraints=unknown)
         pantograph = self.pantograph_definition
         check_uplift(pantograph, force)
         check_fidelity(catenary, resolved)
