@@ -49,7 +49,7 @@ import numpy as np
 from catenary_env.problems import PROBLEMS as DESIGN_PROBLEMS
 from optimizers.base import OptimizationResult, get_optimizer
 from optimizers.ga import GAOptions
-from optimizers.nevergrad_adapters import NevergradOptions, ngopt_fault
+from optimizers.nevergrad_adapters import ngopt_fault
 from optimizers.problem import GridSpace
 from optimizers.problem_registry import resolve_problem
 from optimizers.runner import optimize
@@ -77,7 +77,7 @@ from .rl_studies import policy_options, train_policy
 
 NAME = "optimizers"
 PROBLEMS = ("B1", "SW1")
-OPTIMIZERS = ("ga", "cma", "de", "pso", "random", "ngopt", "ppo")
+OPTIMIZERS = ("ga", "cma", "de", "pso", "random", "ngopt", "tpe", "gp", "ppo")
 SPEED_KMH = 300.0
 TARGET = 0.02
 """Within 2 % of the best σ any run found on the problem."""
@@ -131,7 +131,7 @@ class Config:
             return GAOptions() if self.full else GAOptions(population_size=6)
         if optimizer == "ppo":
             return policy_options(32 if self.full else 8)
-        return NevergradOptions()
+        return get_optimizer(optimizer).options_class()  # its documented defaults, a plug-in's too
 
 
 def main(config: Config) -> Path:
@@ -453,6 +453,16 @@ def _write_ioh(root: Path, evaluations: list[dict[str, Any]], runs: list[dict[st
             )  # fmt: skip
 
 
+def _optimizer_name(name: str) -> str:
+    """``--optimizers`` entries: ppo or a registered (or plugged-in) optimiser; argparse's one line else."""
+    if name != "ppo":
+        try:
+            get_optimizer(name)
+        except KeyError as error:
+            raise argparse.ArgumentTypeError(str(error.args[0])) from None
+    return name
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The study's options (``catenary experiment optimizers`` and its ``python -m`` entry point)."""
     add_full_option(parser, "the study fidelity, 300 simulations a run, 5 seeds (hours)")
@@ -461,9 +471,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"the design problems, of {' '.join(DESIGN_PROBLEMS)} (default: {' '.join(PROBLEMS)})",
     )  # fmt: skip
     parser.add_argument(
-        "--optimizers", nargs="+", default=list(OPTIMIZERS), choices=list(OPTIMIZERS), metavar="NAME",
-        help=f"the optimisers, of {' '.join(OPTIMIZERS)} (default: all); disjoint sets in two processes "
-        "share a problem's runs",
+        "--optimizers", nargs="+", default=list(OPTIMIZERS), type=_optimizer_name, metavar="NAME",
+        help=f"the optimisers, of {' '.join(OPTIMIZERS)} or an installed package's (docs/problems.md, "
+        "'Your own optimiser'; default: all); disjoint sets in two processes share a problem's runs",
     )  # fmt: skip
     add_workers_option(parser, 1, "the simulations of a batch (PPO steps its env in this process)")
     add_out_option(parser)

@@ -14,7 +14,7 @@ Examples
 True
 """
 
-from . import ga, nevergrad_adapters  # noqa: F401  (register the optimisers)
+from . import ga, nevergrad_adapters, optuna_adapters  # noqa: F401  (register the optimisers)
 from .base import (
     OPTIMIZERS,
     EvaluationRecord,

@@ -320,7 +320,12 @@ def register_optimizer(spec: OptimizerSpec) -> OptimizerSpec:
 
 
 def get_optimizer(name: str) -> OptimizerSpec:
-    """The registry entry ``name``; KeyError lists the names available."""
+    """The registry entry ``name``, looked for also among the installed packages' optimisers
+    (:mod:`optimizers.plugins`); UnknownNameError (a KeyError) lists the names available."""
+    if name not in OPTIMIZERS:
+        from .plugins import load_plugins
+
+        load_plugins()
     if name not in OPTIMIZERS:
         raise UnknownNameError(f"unknown optimizer {name!r}; available: {', '.join(sorted(OPTIMIZERS))}")
     return OPTIMIZERS[name]

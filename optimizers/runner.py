@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 
 from catenary_env.cli.progress import LOG_INTERVAL, ProgressDisplay
 
-from . import ga, nevergrad_adapters  # noqa: F401  (register the built-in optimisers)
+from . import ga, nevergrad_adapters, optuna_adapters  # noqa: F401  (register the built-in optimisers)
 from .base import EvaluationRecord, OptimizationResult, Optimizer, get_optimizer
 from .evaluation import EvaluationBackend, make_backend
 from .problem import GridProblem, GridSpace, Outcome
