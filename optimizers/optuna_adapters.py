@@ -85,7 +85,9 @@ class OptunaOptimizer(Optimizer):
 
     summary: ClassVar[str]
 
-    def __init__(self, space: GridSpace, budget: int, seed: int, options: OptunaOptions | None = None) -> None:
+    def __init__(
+        self, space: GridSpace, budget: int, seed: int, options: OptunaOptions | None = None
+    ) -> None:
         super().__init__(space, budget, seed)
         self.options = OptunaOptions() if options is None else options
         if self.options.batch_size < 1:
@@ -160,7 +162,9 @@ class TreeParzen(OptunaOptimizer):
     summary = "Optuna TPESampler (model-based, constraint-aware)"
 
     def _sampler(self) -> Any:
-        return self._optuna.samplers.TPESampler(seed=self.seed, n_startup_trials=self.options.n_startup_trials)
+        return self._optuna.samplers.TPESampler(
+            seed=self.seed, n_startup_trials=self.options.n_startup_trials
+        )
 
 
 class GaussianProcess(OptunaOptimizer):
