@@ -56,6 +56,7 @@ from optimizers.runner import optimize
 from optimizers.store import RunStore
 from optimizers.synthetic import SYNTHETIC_PROBLEMS
 
+from . import benchmark_views as bv
 from .common import (
     DEFAULT_OUT,
     STORE,
@@ -81,6 +82,8 @@ OPTIMIZERS = ("ga", "cma", "de", "pso", "random", "ngopt", "tpe", "gp", "ppo")
 SPEED_KMH = 300.0
 TARGET = 0.02
 """Within 2 % of the best σ any run found on the problem."""
+DE_POPULATION = 30
+"""The size of nevergrad's DE first population here (its default, the "standard" population)."""
 
 
 @dataclass(frozen=True)
@@ -401,11 +404,89 @@ def report(folder: Path) -> str:
     notes += sorted(
         {f"- {r['optimizer']} on {r['problem']}: not run: {r['note']}" for r in runs if r not in done}
     )
-    text = table + "\n\n" + "\n".join(notes)
+    notes += identical_histories(evaluations, runs)
+    text = table + "\n\n" + "\n".join(notes) + "\n\n" + views(folder, curves, runs)
     (folder / "optimizers.md").write_text(text + "\n", encoding="utf-8")
     _figure(curves, reference, folder / "convergence.png")
     _write_ioh(folder / "ioh", evaluations, runs)
     return text
+
+
+def identical_histories(evaluations: list[dict[str, Any]], runs: list[dict[str, Any]]) -> list[str]:
+    """Notes on pairs of optimisers whose runs proposed the same designs on every problem and seed, and why
+    (DE's first population is a random sample drawn from the same seed as random search's)."""
+    designs: dict[tuple[str, str, int], list[str]] = {}
+    for row in evaluations:
+        designs.setdefault((row["optimizer"], row["problem"], int(row["seed"])), []).append(str(row["x_m"]))
+    names = list(dict.fromkeys(r["optimizer"] for r in runs if r["status"] == "done"))
+    notes = []
+    for i, a in enumerate(names):
+        for b in names[i + 1 :]:
+            keys = [(p, s) for (o, p, s) in designs if o == a]
+            if keys and all(designs.get((b, p, s)) == designs[(a, p, s)] for p, s in keys):
+                why = (
+                    f" (nevergrad's DE starts from a random population of {DE_POPULATION}, drawn from the "
+                    "seed as random search draws its designs: a budget within it cannot tell them apart)"
+                    if {a, b} == {"de", "random"}
+                    else ""
+                )
+                notes.append(f"- {a} and {b}: identical histories on every problem and seed{why}")
+    return notes
+
+
+def views(folder: Path, curves: dict[str, dict[str, np.ndarray]], runs: list[dict[str, Any]]) -> str:
+    """The fixed-budget, fixed-target and rank views (:mod:`experiments.benchmark_views`); writes
+    ``fixed_budget.csv``, ``fixed_target.csv``, ``ranks.csv`` and ``ecdf.png``; returns their Markdown."""
+    done = [r for r in runs if r["status"] == "done"]
+    lengths: dict[str, dict[str, list[int]]] = {}
+    finals: dict[str, dict[tuple[str, int], float]] = {}
+    for r in done:  # in the order of summarise's curves
+        lengths.setdefault(r["problem"], {}).setdefault(r["optimizer"], []).append(int(r["n_simulations"]))
+    for problem, by_optimizer in curves.items():
+        seeds = {
+            o: [int(r["seed"]) for r in done if r["problem"] == problem and r["optimizer"] == o]
+            for o in by_optimizer
+        }
+        for optimizer, stack in by_optimizer.items():
+            for seed, curve in zip(seeds[optimizer], stack, strict=True):
+                finals.setdefault(optimizer, {})[(problem, seed)] = float(curve[-1])
+    best = {p: b.sigma_N for p in curves if p in DESIGN_PROBLEMS and (b := DESIGN_PROBLEMS[p].best_known)}
+    budget_rows = bv.fixed_budget_rows(curves)
+    target_rows = bv.fixed_target_rows(curves, lengths, best)
+    write_csv(folder / "fixed_budget.csv", budget_rows)
+    parts = ["### Fixed budget: best σ (N), median [IQR] of the runs", markdown_table(
+        budget_rows, [("problem", "problem", "s"), ("optimizer", "optimiser", "s"), ("runs", "runs", "d")]
+        + [(k, f"after {k[3:]} simulations", "s") for k in budget_rows[0] if k.startswith("at_")],
+    )] if budget_rows else []  # fmt: skip
+    if target_rows:
+        write_csv(folder / "fixed_target.csv", target_rows)
+        columns = [("problem", "problem", "s"), ("optimizer", "optimiser", "s")]
+        columns += [(f"cell_{100 * t:g}", f"ERT to {100 * t:g} % (runs reached)", "s") for t in bv.TARGETS]
+        targets = ", ".join(f"{p} {s:.2f} N" for p, s in best.items())
+        parts += [f"### Fixed target: simulations to come within x % of the best-known σ ({targets})",
+                  markdown_table(target_rows, columns)]  # fmt: skip
+        budget = int(max(int(r["budget"]) for r in done))
+        bv.ecdf_figure(bv.ecdf(curves, lengths, best, budget), list(best), folder / "ecdf.png")
+    if len(finals) >= 3:
+        parts.append(_rank_section(folder, finals))
+    return "\n\n".join(parts)
+
+
+def _rank_section(folder: Path, finals: dict[str, dict[tuple[str, int], float]]) -> str:
+    friedman, pairs = bv.rank_tests(finals)
+    write_csv(folder / "ranks.csv", pairs)
+    ranks = sorted(friedman["mean_ranks"].items(), key=lambda item: item[1])
+    significant = [f"{p['better']} better than {p['b'] if p['better'] == p['a'] else p['a']} "
+                   f"(p = {p['p_holm']:.3f})" for p in pairs if p["significant"]]  # fmt: skip
+    return "\n".join([
+        f"### Ranks over {friedman['blocks']} blocks (problem, seed) by final best σ",
+        "",
+        "mean rank (1 = best): " + ", ".join(f"{name} {rank:.2f}" for name, rank in ranks),
+        "",
+        f"Friedman χ² = {friedman['statistic']:.2f}, p = {friedman['p_value']:.2g}; pairwise Wilcoxon "
+        f"signed-rank tests with Holm's correction at {bv.ALPHA:g}: "
+        + ("; ".join(significant) if significant else "no pair differs significantly"),
+    ])  # fmt: skip
 
 
 def _figure(curves: dict[str, dict[str, np.ndarray]], reference: dict[str, float], path: Path) -> None:

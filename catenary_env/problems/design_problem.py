@@ -39,6 +39,7 @@ from ..fingerprint import model_fingerprint
 from ..model.definition import CatenaryDefinition, PantographDefinition
 from ..model.design import Design, DesignError, check_design, check_speed, presag_design, symmetric_design
 from ..pipeline import FIDELITIES, Evaluation, Fidelity, check_fidelity, check_uplift
+from .best_known import BestKnown, best_known_table
 from .grid import DesignGrid
 from .reference import calibrated_uplift, preset_catenary, preset_pantograph, reference_evaluation
 
@@ -253,6 +254,13 @@ class DesignProblem:
             self.upper.tolist(),
             self.step.tolist(),
         )
+
+    @property
+    def best_known(self) -> BestKnown | None:
+        """The best-known design of this problem (:mod:`~catenary_env.problems.best_known`), or None where
+        none is recorded for this model (its :meth:`store_fingerprint`)."""
+        best = best_known_table().get(self.name)
+        return best if best is not None and best.model_fingerprint == self.store_fingerprint() else None
 
     def store_fingerprint(self) -> str:
         """:meth:`fingerprint` with the named fidelities' settings (mesh, time step, the span-mode model's
