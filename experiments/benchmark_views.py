@@ -78,8 +78,9 @@ def fixed_budget_rows(curves: dict[str, dict[str, np.ndarray]]) -> list[dict[str
         for optimizer, stack in by_optimizer.items():
             row: dict[str, Any] = {"problem": problem, "optimizer": optimizer, "runs": len(stack)}
             for budget in [b for b in BUDGETS if b <= stack.shape[1]] or [stack.shape[1]]:
-                finite = np.where(np.isfinite(stack[:, budget - 1]), stack[:, budget - 1], np.inf)
-                q25, median, q75 = (float(v) for v in np.quantile(finite, (0.25, 0.5, 0.75)))
+                capped = np.where(np.isfinite(stack[:, budget - 1]), stack[:, budget - 1], 1e300)
+                quantiles = np.quantile(capped, (0.25, 0.5, 0.75))
+                q25, median, q75 = (float(v) if v < 1e299 else np.inf for v in quantiles)
                 row[f"at_{budget}"] = _cell(median, q25, q75)
                 row[f"median_at_{budget}_N"] = median
             rows.append(row)

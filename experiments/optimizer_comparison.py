@@ -450,7 +450,7 @@ def views(folder: Path, curves: dict[str, dict[str, np.ndarray]], runs: list[dic
         for optimizer, stack in by_optimizer.items():
             for seed, curve in zip(seeds[optimizer], stack, strict=True):
                 finals.setdefault(optimizer, {})[(problem, seed)] = float(curve[-1])
-    best = {p: b.sigma_N for p in curves if p in DESIGN_PROBLEMS and (b := DESIGN_PROBLEMS[p].best_known)}
+    best = _best_known(curves, done)
     budget_rows = bv.fixed_budget_rows(curves)
     target_rows = bv.fixed_target_rows(curves, lengths, best)
     write_csv(folder / "fixed_budget.csv", budget_rows)
@@ -470,6 +470,17 @@ def views(folder: Path, curves: dict[str, dict[str, np.ndarray]], runs: list[dic
     if len(finals) >= 3:
         parts.append(_rank_section(folder, finals))
     return "\n\n".join(parts)
+
+
+def _best_known(curves: dict[str, Any], done: list[dict[str, Any]]) -> dict[str, float]:
+    """The best-known σ of the problems whose runs are on its fidelity (not the quick setting's test
+    model)."""
+    best = {}
+    for problem in curves:
+        known = DESIGN_PROBLEMS[problem].best_known if problem in DESIGN_PROBLEMS else None
+        if known and all(r["fidelity"] == known.fidelity for r in done if r["problem"] == problem):
+            best[problem] = known.sigma_N
+    return best
 
 
 def _rank_section(folder: Path, finals: dict[str, dict[tuple[str, int], float]]) -> str:
