@@ -110,9 +110,7 @@ def fixed_target_rows(
                 label = f"{100 * target:g}"
                 row[f"ert_{label}"] = ert
                 row[f"reached_{label}"] = f"{sum(r for _, r in times)}/{len(times)}"
-                row[f"cell_{label}"] = (
-                    f"{ert:.0f} ({row[f'reached_{label}']})" if np.isfinite(ert) else "∞ (0)"
-                )
+                row[f"cell_{label}"] = f"{ert:.0f} ({row[f'reached_{label}']})".replace("inf", "∞")
             rows.append(row)
     return rows
 
