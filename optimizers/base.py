@@ -82,6 +82,9 @@ class EvaluationRecord:
     constraints : tuple of float
         The problem's constraint values (feasible when all are <= 0; NaN where not computed); empty where
         the problem gives none, or the store that served it predates them.
+    statistics : tuple of float
+        The problem's other statistics of the design (for a catenary problem every field of
+        ``ContactStatistics``); empty where not simulated dynamically, or not stored.
     """
 
     index: int
@@ -94,6 +97,7 @@ class EvaluationRecord:
     charged: bool
     speed_kmh: float
     constraints: tuple[float, ...] = ()
+    statistics: tuple[float, ...] = ()
 
     @property
     def loss(self) -> float:

@@ -11,10 +11,12 @@ Columns: ``run_id``, ``optimizer``, ``seed``, ``index`` (in the run), ``problem`
 of the model: definitions, fidelities and simulator, :mod:`catenary_env.fingerprint`), one column per
 design variable (m), ``speed_kmh``, ``fidelity``, ``feasible``, ``reason``, ``sigma_N`` (σ of the 20 Hz
 filtered contact force; null where no passage was simulated), one column per constraint value
-(feasible when all are <= 0; null where not computed or not stored), ``wall_time_s``, ``cached``,
+(feasible when all are <= 0; null where not computed or not stored), one column per statistic of the
+contact force (``mean_stat``, ``std_stat`` (σ again), ``statistical_max_stat``, ... in N,
+``contact_loss_percent_stat`` in %, ``max_support_uplift_stat`` in m; null where not simulated, or stored
+before the run store kept them), ``wall_time_s``, ``cached``,
 ``charged``, ``source`` (``simulation``; ``env`` for an RL run's env steps), ``reward`` (RL runs),
-``package_version``, ``created_at``. The store keeps σ of each evaluation, not the other contact-force
-statistics, so the dataset has σ only.
+``package_version``, ``created_at``.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from typing import Any
 
 from catenary_env.errors import MissingDependency, UnknownNameError
 
-from .problem import constraint_names
+from .problem import constraint_names, statistic_names
 from .problem_registry import resolve_problem
 from .store import RunStore
 
@@ -36,31 +38,35 @@ DATASHEET = "DATASHEET.md"
 """The datasheet's file name in the output folder."""
 
 
-def _names(problem: str, n_variables: int, n_constraints: int) -> tuple[list[str], list[str]]:
-    """The variables' and constraints' column names of a problem (generic ones for one unknown here)."""
+def _names(problem: str, sizes: Sequence[int]) -> list[list[str]]:
+    """The variables', constraints' and statistics' column names of a problem (generic ones where the
+    problem is unknown here or gives another number of values)."""
     try:
         grid_problem = resolve_problem(problem)
-        variables = list(grid_problem.variable_names)
-        constraints = list(constraint_names(grid_problem))
+        known = [list(grid_problem.variable_names), list(constraint_names(grid_problem))]
+        known.append([f"{name}_stat" for name in statistic_names(grid_problem)])
     except UnknownNameError:
-        variables, constraints = [], []
-    if len(variables) != n_variables:
-        variables = [f"x_{i}" for i in range(n_variables)]
-    if len(constraints) != n_constraints:
-        constraints = [f"constraint_{i}" for i in range(n_constraints)]
-    return variables, constraints
+        known = [[], [], []]
+    prefixes = ("x", "constraint", "statistic")
+    return [
+        names if len(names) == size else [f"{prefix}_{i}" for i in range(size)]
+        for names, size, prefix in zip(known, sizes, prefixes, strict=True)
+    ]
+
+
+def _optional(names: list[str], stored: Sequence[float]) -> dict[str, float | None]:
+    """Values by name, None where not stored or not computed (NaN)."""
+    values = list(stored) or [None] * len(names)
+    return {n: None if v is None or math.isnan(v) else float(v) for n, v in zip(names, values, strict=True)}
 
 
 def _table(rows: Sequence[dict[str, Any]], problem: str, model: str) -> dict[str, list[Any]]:
-    n_variables = max(len(r["x"]) for r in rows)
-    n_constraints = max((len(r["constraints"]) for r in rows), default=0)
-    variables, constraints = _names(problem, n_variables, n_constraints)
-    columns: dict[str, list[Any]] = {
-        name: [] for name in ["run_id", "optimizer", "seed", "index", "problem", "model", *variables]
-    }
-    rest = ["speed_kmh", "fidelity", "feasible", "reason", "sigma_N", *constraints, "wall_time_s", "cached",
-            "charged", "source", "reward", "package_version", "created_at"]  # fmt: skip
-    columns.update({name: [] for name in rest})
+    sizes = [max(len(r[key]) for r in rows) for key in ("x", "constraints", "statistics")]
+    variables, constraints, statistics = _names(problem, sizes)
+    names = ["run_id", "optimizer", "seed", "index", "problem", "model", *variables, "speed_kmh", "fidelity",
+             "feasible", "reason", "sigma_N", *constraints, *statistics, "wall_time_s", "cached", "charged",
+             "source", "reward", "package_version", "created_at"]  # fmt: skip
+    columns: dict[str, list[Any]] = {name: [] for name in names}
     for r in rows:
         values = {"run_id": r["run_id"], "optimizer": r["optimizer"], "seed": r["seed"], "index": r["idx"],
                   "problem": problem, "model": model, "speed_kmh": r["speed_kmh"], "fidelity": r["fidelity"],
@@ -69,10 +75,8 @@ def _table(rows: Sequence[dict[str, Any]], problem: str, model: str) -> dict[str
                   "source": r["source"], "reward": r["reward"], "package_version": r["package_version"],
                   "created_at": r["created_at"]}  # fmt: skip
         values.update(zip(variables, r["x"], strict=True))
-        stored = list(r["constraints"]) or [None] * len(constraints)
-        values.update(
-            (n, None if v is None or math.isnan(v) else v) for n, v in zip(constraints, stored, strict=True)
-        )
+        values.update(_optional(constraints, r["constraints"]))
+        values.update(_optional(statistics, r["statistics"]))
         for name, column in columns.items():
             column.append(values[name])
     return columns
@@ -130,7 +134,8 @@ catenary-env (docs/problems.md), each simulated by the finite element model of t
 interaction (docs/model.md): its variables (m), σ of the 20 Hz filtered contact force (N), the feasibility
 constraint values (feasible when all are <= 0: the largest dropper compression at equilibrium in N, the
 largest dropper-length shortfall in m and the contact-loss share in %), feasibility and its reason, the
-speed (km/h), the model fidelity and the model's fingerprint. Columns: see `optimizers/dataset.py`.
+other statistics of the contact force, the speed (km/h), the model fidelity and the model's fingerprint.
+Columns: see `optimizers/dataset.py`.
 
 | problem | model | rows | simulations (`cached = false`) | feasible simulations |
 |---|---|---|---|---|
@@ -147,7 +152,7 @@ comparable: the files are split by model. Written by `catenary export`.
 Surrogate models of σ and of feasibility, benchmarks of optimisers on recorded data. σ comes from the
 fidelity named in each row (`study`: the span-mode model of 20 spans; `test`: a coarse model for unit
 tests, not for design conclusions; docs/performance.md, 'Model fidelities'). The other statistics of the
-contact force are not stored.
+contact force (the columns ending `_stat`) are empty in rows stored before the run store kept them.
 
 ## How to cite
 Cite catenary-env (the repository and its version, the `package_version` column) and the model it

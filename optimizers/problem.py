@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from catenary_env.problems.grid import DesignGrid
 
-__all__ = ["GridProblem", "GridSpace", "Outcome", "SimulateFunction", "constraint_names"]
+__all__ = ["GridProblem", "GridSpace", "Outcome", "SimulateFunction", "constraint_names", "statistic_names"]
 
 
 class Outcome(NamedTuple):
@@ -52,6 +52,9 @@ class Outcome(NamedTuple):
     constraints : tuple of float
         The problem's constraint values (its ``constraint_names``), feasible when all are <= 0; NaN where
         not computed, empty where the problem or the store that served the outcome gives none.
+    statistics : tuple of float
+        The problem's other statistics of the outcome (its ``statistic_names``; for a catenary problem
+        every field of ``ContactStatistics``, N, % and m), empty where not simulated or not given.
     """
 
     feasible: bool
@@ -59,6 +62,7 @@ class Outcome(NamedTuple):
     reason: str
     wall_time: float
     constraints: tuple[float, ...] = ()
+    statistics: tuple[float, ...] = ()
 
 
 SimulateFunction = Callable[[tuple[float, ...], float, str], Outcome]
@@ -81,8 +85,9 @@ class GridProblem(Protocol):
     simulate : SimulateFunction
         Picklable ``simulate(x, speed_kmh, fidelity) -> Outcome``; deterministic.
 
-    A problem may also name the values of its outcomes' ``constraints`` in ``constraint_names`` (a tuple
-    of str; :func:`constraint_names` reads it, empty when absent).
+    A problem may also name the values of its outcomes' ``constraints`` in ``constraint_names`` and their
+    ``statistics`` in ``statistic_names`` (tuples of str; :func:`constraint_names` and
+    :func:`statistic_names` read them, empty when absent).
     """
 
     @property
@@ -159,3 +164,8 @@ class GridSpace(DesignGrid):
 def constraint_names(problem: GridProblem) -> tuple[str, ...]:
     """The names of a problem's constraint values (:attr:`Outcome.constraints`), empty if it names none."""
     return tuple(getattr(problem, "constraint_names", ()))
+
+
+def statistic_names(problem: GridProblem) -> tuple[str, ...]:
+    """The names of a problem's statistics (:attr:`Outcome.statistics`), empty if it names none."""
+    return tuple(getattr(problem, "statistic_names", ()))

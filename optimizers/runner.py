@@ -214,7 +214,7 @@ class _BatchEvaluator:
         if stored is not None:
             record = stored.record
             r = record
-            outcome = Outcome(r.feasible, r.sigma, r.reason, r.wall_time, r.constraints)
+            outcome = Outcome(r.feasible, r.sigma, r.reason, r.wall_time, r.constraints, r.statistics)
             self.seen.setdefault(key, outcome)
             return record, int(record.charged)
         if key in self.seen:
@@ -273,6 +273,7 @@ class _BatchEvaluator:
             charged=charged,
             speed_kmh=self.speed_kmh,
             constraints=tuple(float(v) for v in outcome.constraints),
+            statistics=tuple(float(v) for v in outcome.statistics),
         )
         self.recorder.persist(record, key)
         return record

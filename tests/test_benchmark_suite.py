@@ -14,6 +14,7 @@ from catenary_env.pipeline import CONSTRAINTS
 from catenary_env.problems import PROBLEMS, get_problem
 from experiments import benchmark_views as bv
 from optimizers import RunStore, optimize
+from optimizers.catenary_adapter import STATISTICS, simulate_catenary_design
 from optimizers.store import SCHEMA_VERSION
 
 # -- constraint values ----------------------------------------------------------------------------------
@@ -32,6 +33,9 @@ def test_constraint_values_say_what_feasibility_says():
     assert not compressed.feasible and "compression" in compressed.reason
     assert compressed.constraints[0] > 0.0 and math.isnan(compressed.constraints[2])  # no passage
     assert f"{-compressed.constraints[0]:.2f} N" in compressed.reason
+    outcome = simulate_catenary_design("B1", (0.0,) * 5, 300.0, "test")  # what an optimiser's run stores
+    assert outcome.constraints == feasible.constraints and len(outcome.statistics) == len(STATISTICS)
+    assert outcome.statistics[STATISTICS.index("std")] == outcome.sigma == feasible.statistics.std
     env = gym.make("Catenary-B1-v0", fidelity="test", n_spans=5)
     env.reset(seed=0)
     info = env.step(np.zeros(5, np.float32))[4]
@@ -45,6 +49,7 @@ def test_a_version_1_store_is_read_as_it_is_and_upgraded_for_writing(tmp_path):
         optimize("synthetic-quadratic", "random", budget=5, seed=0, fidelity="test", store=store)
     with sqlite3.connect(path) as connection:  # what a store of schema version 1 looked like
         connection.execute("ALTER TABLE evaluations DROP COLUMN constraints")
+        connection.execute("ALTER TABLE evaluations DROP COLUMN statistics")
         connection.execute("PRAGMA user_version = 1")
     with RunStore(path, read_only=True) as store:
         assert store.schema_version == 1
@@ -54,6 +59,7 @@ def test_a_version_1_store_is_read_as_it_is_and_upgraded_for_writing(tmp_path):
         resumed = optimize("synthetic-quadratic", "random", budget=5, seed=0, fidelity="test", store=store,
                            resume=True)  # fmt: skip
         assert [record.constraints for record in resumed.history] == [()] * 5  # as stored, not re-simulated
+        assert [record.statistics for record in resumed.history] == [()] * 5
     with sqlite3.connect(path) as connection:
         assert connection.execute("PRAGMA user_version").fetchone()[0] == 2
 

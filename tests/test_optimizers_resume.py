@@ -69,7 +69,14 @@ def test_killed_run_resumes_to_the_uninterrupted_result(tmp_path, optimizer):
     assert resumed.returncode == 0, resumed.stderr
     result = json.loads(resumed.stdout)
     history = [
-        EvaluationRecord(**{**entry, "x": tuple(entry["x"]), "constraints": tuple(entry["constraints"])})
+        EvaluationRecord(
+            **{
+                **entry,
+                "x": tuple(entry["x"]),
+                "constraints": tuple(entry["constraints"]),
+                "statistics": tuple(entry["statistics"]),
+            }
+        )
         for entry in result["history"]
     ]
 
