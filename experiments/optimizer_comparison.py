@@ -1,8 +1,9 @@
 """Study 4: which optimiser finds the smoothest design with the fewest simulations (docs/problems.md,
 'Experiments').
 
-The published study's GA, nevergrad's CMA-ES, DE, PSO, random search and NGOpt, and the PPO design policy, on
-B1 and SW1 at 300 km/h, each with the same budget of simulations and several seeds. Every run goes to one
+The published study's GA, nevergrad's CMA-ES, DE, PSO, random search and NGOpt, Optuna's TPE and Gaussian
+process, and the PPO design policy (and any optimiser an installed package plugs in), at 300 km/h, each with
+the same budget of simulations and several seeds. Every run goes to one
 run store (the studies' shared ``runs.sqlite`` in the output folder, or ``Config.store``) and is resumed
 from it: a study run again, or interrupted and restarted, replays what is stored and simulates only what
 is missing, and a design simulated by one run is served to the others from the store's cache (it is still
@@ -22,7 +23,8 @@ Outputs (``results/optimizers/``):
   one panel per problem;
 - ``ioh/``: the runs in the IOHprofiler format, for IOHanalyzer (:mod:`experiments.iohprofiler`).
 
-Settings. Full: the study fidelity, 300 simulations a run, 5 seeds, the GA's population of
+Settings. Full (the protocol of docs/problems.md, 'Reading the comparison'): the six problems with variables,
+the study fidelity, 300 simulations a run, 15 seeds on B1 and SW1 and 10 on the others, the GA's population of
 docs/problems.md ('Optimisers'), nevergrad's batches of 8, PPO as in :mod:`experiments.rl_studies`
 (rollouts of 32 steps, the policy starting at the reference design with a spread of 4 mm). Quick: the
 "test" fidelity, 12 simulations a run, 2 seeds, a GA population of 6 and PPO rollouts of 8 steps (a smoke
@@ -74,10 +76,17 @@ from .common import (
 from .design_evaluations import evaluate_designs, study_problem
 from .iohprofiler import runs_from_rows, write_algorithm
 from .model_stamp import catenaries_of, stamp_study
-from .rl_studies import policy_options, train_policy
+from .rl_studies import check_starts_at_reference, policy_options, train_policy
 
 NAME = "optimizers"
 PROBLEMS = ("B1", "SW1")
+"""The problems of the quick setting."""
+FULL_PROBLEMS = ("B1", "B2", "B3", "SW1", "SW2", "SW3")
+"""The problems of the full protocol: every problem with variables (docs/problems.md, 'Reading the
+comparison')."""
+FULL_SEEDS = {"B1": 15, "SW1": 15}
+"""Seeds per problem in the full protocol (:data:`FULL_OTHER_SEEDS` for the others)."""
+FULL_OTHER_SEEDS = 10
 OPTIMIZERS = ("ga", "cma", "de", "pso", "random", "ngopt", "tpe", "gp", "ppo")
 SPEED_KMH = 300.0
 TARGET = 0.02
@@ -93,15 +102,17 @@ class Config:
     Attributes
     ----------
     full : bool
-        The study fidelity, 300 simulations a run, 5 seeds; else quick.
+        The full protocol: the study fidelity, 300 simulations a run, 15 seeds on B1 and SW1 and 10 on the
+        other problems; else quick (2 seeds).
     out : Path
         The results folder; the study writes into ``out/optimizers``.
     workers : int
         Local worker processes for the simulations of a batch (PPO steps its env in this process).
     store : Path or None
         The run store; default ``out/runs.sqlite``, shared by the studies.
-    problems : tuple of str
-        The design problems compared; a synthetic problem (``optimizers/synthetic.py``) runs the study's
+    problems : tuple of str or None
+        The design problems compared (None: :data:`FULL_PROBLEMS` in full, :data:`PROBLEMS` quick); a
+        synthetic problem (``optimizers/synthetic.py``) runs the study's
         machinery in microseconds an evaluation, with every optimiser but PPO (which needs a design env).
     optimizers : tuple of str
         The optimisers run (default all of :data:`OPTIMIZERS`). Two processes given disjoint sets share
@@ -113,8 +124,12 @@ class Config:
     out: Path = DEFAULT_OUT
     workers: int = 1
     store: Path | None = None
-    problems: tuple[str, ...] = PROBLEMS
+    problems: tuple[str, ...] = None  # type: ignore[assignment]  (set in __post_init__)
     optimizers: tuple[str, ...] = OPTIMIZERS
+
+    def __post_init__(self) -> None:
+        if self.problems is None:
+            object.__setattr__(self, "problems", FULL_PROBLEMS if self.full else PROBLEMS)
 
     @property
     def fidelity(self) -> str:
@@ -126,7 +141,14 @@ class Config:
 
     @property
     def seeds(self) -> tuple[int, ...]:
-        return (0, 1, 2, 3, 4) if self.full else (0, 1)
+        """The seeds of B1 and SW1 (the most of any problem)."""
+        return self.seeds_for("B1")
+
+    def seeds_for(self, problem: str) -> tuple[int, ...]:
+        """The seeds of a problem's runs."""
+        if not self.full:
+            return (0, 1)
+        return tuple(range(FULL_SEEDS.get(problem, FULL_OTHER_SEEDS)))
 
     def options(self, optimizer: str) -> Any:
         """The hyper-parameters of an optimiser in this setting."""
@@ -158,7 +180,7 @@ def main(config: Config) -> Path:
                 }
             )
             for optimizer in config.optimizers:
-                for seed in config.seeds:
+                for seed in config.seeds_for(problem):
                     result, note = _run(store, config, optimizer, problem, seed)
                     if result is None:
                         run_rows.append(_not_run_row(config, optimizer, problem, seed, note))
@@ -181,6 +203,10 @@ def _run(
     """One run (resumed from the store), or None and why it cannot run here."""
     options = config.options(optimizer)
     if optimizer == "ppo":
+        try:  # the policy starts at the reference design only where the bounds are centred on it
+            check_starts_at_reference(problem)
+        except ValueError as error:
+            return None, str(error)
         _, result = train_policy(
             store, problem, config.budget, seed, options, config.fidelity, speed_kmh=SPEED_KMH,
             quiet=not config.full,
@@ -557,10 +583,15 @@ def _optimizer_name(name: str) -> str:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The study's options (``catenary experiment optimizers`` and its ``python -m`` entry point)."""
-    add_full_option(parser, "the study fidelity, 300 simulations a run, 5 seeds (hours)")
+    add_full_option(
+        parser,
+        "the study fidelity, 300 simulations a run, 15 seeds on B1 and SW1, 10 on the others "
+        "(about 27 h on two cores for the six problems, docs/performance.md)",
+    )
     parser.add_argument(
-        "--problems", nargs="+", default=list(PROBLEMS), choices=list(DESIGN_PROBLEMS), metavar="NAME",
-        help=f"the design problems, of {' '.join(DESIGN_PROBLEMS)} (default: {' '.join(PROBLEMS)})",
+        "--problems", nargs="+", default=None, choices=list(DESIGN_PROBLEMS), metavar="NAME",
+        help=f"the design problems, of {' '.join(DESIGN_PROBLEMS)} (default: {' '.join(FULL_PROBLEMS)} with "
+        f"--full, else {' '.join(PROBLEMS)})",
     )  # fmt: skip
     parser.add_argument(
         "--optimizers", nargs="+", default=list(OPTIMIZERS), type=_optimizer_name, metavar="NAME",
