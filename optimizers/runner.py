@@ -213,9 +213,11 @@ class _BatchEvaluator:
         stored = self.recorder.stored(index, key)
         if stored is not None:
             record = stored.record
-            r = record
-            outcome = Outcome(r.feasible, r.sigma, r.reason, r.wall_time, r.constraints, r.statistics)
-            self.seen.setdefault(key, outcome)
+            self.seen.setdefault(
+                key,
+                Outcome(record.feasible, record.sigma, record.reason, record.wall_time, record.constraints,
+                        record.statistics),
+            )  # fmt: skip
             return record, int(record.charged)
         if key in self.seen:
             return self._record(index, x, self.seen[key], cached=True, charged=False, key=key), 0
