@@ -141,3 +141,16 @@ def test_the_ioh_wrapper_maps_the_unit_box_to_the_grid():
     assert problem([0.5, 0.5, 0.5]) == pytest.approx(float(synthetic.sigma(np.zeros(3))))
     assert problem([1.0, 1.0, 1.0]) == INFEASIBLE_Y  # x_1 + x_3 = 40 mm > 12 mm
     assert problem.meta_data.n_variables == 3 and problem.state.evaluations == 2
+
+
+def test_the_comparison_takes_any_registered_optimizer_with_its_own_options(capsys):
+    from experiments import optimizer_comparison
+    from experiments.common import study_parser
+    from optimizers.optuna_adapters import OptunaOptions
+
+    assert isinstance(optimizer_comparison.Config().options("tpe"), OptunaOptions)  # was: NevergradOptions
+    parser = study_parser(optimizer_comparison, "catenary experiment optimizers")
+    assert parser.parse_args(["--optimizers", "gp", "ppo"]).optimizers == ["gp", "ppo"]
+    with pytest.raises(SystemExit):
+        parser.parse_args(["--optimizers", "nosuch"])
+    assert "unknown optimizer 'nosuch'" in capsys.readouterr().err
