@@ -164,9 +164,13 @@ class OptimizationResult:
     best_speed_kmh: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        """A JSON-ready dict (history entries as dicts)."""
+        """A JSON-ready dict (history entries as dicts; a constraint value or statistic not computed, NaN,
+        as None)."""
         data = dataclasses.asdict(self)
         data["history"] = [dataclasses.asdict(record) for record in self.history]
+        for entry in data["history"]:
+            for key in ("constraints", "statistics"):
+                entry[key] = [None if np.isnan(v) else v for v in entry[key]]
         return data
 
 
