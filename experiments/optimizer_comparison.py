@@ -49,9 +49,10 @@ from typing import Any
 import numpy as np
 
 from catenary_env.problems import PROBLEMS as DESIGN_PROBLEMS
-from optimizers.base import OptimizationResult, get_optimizer
+from optimizers.base import OptimizationResult
 from optimizers.ga import GAOptions
 from optimizers.nevergrad_adapters import ngopt_fault
+from optimizers.plugins import get_optimizer
 from optimizers.problem import GridSpace
 from optimizers.problem_registry import resolve_problem
 from optimizers.runner import optimize

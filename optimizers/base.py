@@ -38,7 +38,7 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from catenary_env.errors import UnknownNameError, UsageError
+from catenary_env.errors import UsageError
 from catenary_env.registry import Registry
 
 from .problem import GridSpace
@@ -50,7 +50,6 @@ __all__ = [
     "Optimizer",
     "OptimizerRegistry",
     "OptimizerSpec",
-    "get_optimizer",
     "register_optimizer",
 ]
 
@@ -325,15 +324,3 @@ OPTIMIZERS = OptimizerRegistry()
 def register_optimizer(spec: OptimizerSpec) -> OptimizerSpec:
     """Add an optimiser to :data:`OPTIMIZERS`; ValueError if the name is taken."""
     return OPTIMIZERS.register(spec)
-
-
-def get_optimizer(name: str) -> OptimizerSpec:
-    """The registry entry ``name``, looked for also among the installed packages' optimisers
-    (:mod:`optimizers.plugins`); UnknownNameError (a KeyError) lists the names available."""
-    if name not in OPTIMIZERS:
-        from .plugins import load_plugins
-
-        load_plugins()
-    if name not in OPTIMIZERS:
-        raise UnknownNameError(f"unknown optimizer {name!r}; available: {', '.join(sorted(OPTIMIZERS))}")
-    return OPTIMIZERS[name]

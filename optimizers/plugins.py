@@ -6,7 +6,7 @@ A package that declares, in its ``pyproject.toml``::
     mine = "my_package.my_module:MyOptimizer"
 
 has its optimiser registered under ``mine`` the first time an optimiser is looked up by a name the
-registry does not hold (:func:`optimizers.base.get_optimizer`), so it runs with ``catenary optimize
+registry does not hold (:func:`get_optimizer`), so it runs with ``catenary optimize
 --optimizer mine``, in :func:`optimizers.optimize` and in the comparison harness
 (``catenary experiment optimizers --optimizers mine``). The object named may be
 
@@ -27,9 +27,11 @@ import warnings
 from dataclasses import dataclass
 from typing import Any
 
+from catenary_env.errors import UnknownNameError
+
 from .base import OPTIMIZERS, Optimizer, OptimizerSpec
 
-__all__ = ["ENTRY_POINT_GROUP", "NoOptions", "load_plugins", "plugin_spec"]
+__all__ = ["ENTRY_POINT_GROUP", "NoOptions", "get_optimizer", "load_plugins", "plugin_spec"]
 
 ENTRY_POINT_GROUP = "catenary_env.optimizers"
 """The entry-point group an installed package declares its optimisers in."""
@@ -79,3 +81,13 @@ def load_plugins() -> tuple[str, ...]:
         OPTIMIZERS.register(spec)
         added.append(spec.name)
     return tuple(added)
+
+
+def get_optimizer(name: str) -> OptimizerSpec:
+    """The registry entry ``name``, looked for also among the installed packages' optimisers
+    (:func:`load_plugins`); UnknownNameError (a KeyError) lists the names available."""
+    if name not in OPTIMIZERS:
+        load_plugins()
+    if name not in OPTIMIZERS:
+        raise UnknownNameError(f"unknown optimizer {name!r}; available: {', '.join(sorted(OPTIMIZERS))}")
+    return OPTIMIZERS[name]

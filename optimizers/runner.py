@@ -34,8 +34,9 @@ from numpy.typing import NDArray
 from catenary_env.cli.progress import LOG_INTERVAL, ProgressDisplay
 
 from . import ga, nevergrad_adapters, optuna_adapters  # noqa: F401  (register the built-in optimisers)
-from .base import EvaluationRecord, OptimizationResult, Optimizer, get_optimizer
+from .base import EvaluationRecord, OptimizationResult, Optimizer
 from .evaluation import EvaluationBackend, make_backend
+from .plugins import get_optimizer
 from .problem import GridProblem, GridSpace, Outcome
 from .problem_registry import resolve_problem
 from .recorder import RunRecorder, open_run, options_json, package_version

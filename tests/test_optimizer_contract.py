@@ -15,8 +15,8 @@ import pytest
 
 from catenary_env.cli import main
 from optimizers import OPTIMIZERS, RunStore, optimize
-from optimizers.base import Optimizer, get_optimizer
-from optimizers.plugins import ENTRY_POINT_GROUP, load_plugins
+from optimizers.base import Optimizer
+from optimizers.plugins import ENTRY_POINT_GROUP, get_optimizer, load_plugins
 from optimizers.problem import GridSpace, Outcome
 from optimizers.synthetic import QuadraticProblem, get_synthetic_problem, simulate_quadratic
 

@@ -114,8 +114,9 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     `max_support_uplift` in m; absent when the design was not simulated dynamically),
     `uplift_force` (N), `constraints` (the values of `catenary_env.pipeline.CONSTRAINTS` by name: the largest
     dropper compression in N, the largest dropper-length shortfall in m and the contact-loss share in %;
-    feasible when all are <= 0; NaN where not computed, arrays over the speeds with a multi-speed
-    objective), `dropper_lengths` (m) and `dropper_forces` (N) of a central span,
+    feasible when all are <= 0; a value not computed is absent, e.g. the contact loss of a design that failed
+    the static check; arrays over the speeds with a multi-speed objective, NaN where not computed),
+    `dropper_lengths` (m) and `dropper_forces` (N) of a central span,
     `wall_time` (s, of the simulations behind the result) and `clipped` (bool). With a multi-speed
     objective, `speed_kmh`, the statistics and `uplift_force` are arrays over `speeds_kmh`; a design is
     not simulated at the speeds after the first at which it is infeasible (the statistics are then absent,
@@ -404,9 +405,10 @@ def _check_speed(catenary: CatenaryDefinition, speed_kmh: float) -> None:
 
 def _constraint_info(evaluations: Sequence[Evaluation], n_speeds: int) -> dict[str, Any]:
     """``info["constraints"]``: each of :data:`~catenary_env.pipeline.CONSTRAINTS` by name (feasible when
-    <= 0), a float at one speed, else an array over the speeds (NaN where not simulated)."""
+    <= 0), a float at one speed (absent where not computed), else an array over the speeds (NaN where not
+    computed)."""
     values = [tuple(e.constraints) or (math.nan,) * len(CONSTRAINTS) for e in evaluations]
     values += [(math.nan,) * len(CONSTRAINTS)] * (n_speeds - len(values))
-    if n_speeds == 1:
-        return {name: float(values[0][i]) for i, name in enumerate(CONSTRAINTS)}
+    if n_speeds == 1:  # a value not computed is absent, as the statistics of a design not simulated are
+        return {name: float(v) for name, v in zip(CONSTRAINTS, values[0], strict=True) if not math.isnan(v)}
     return {name: np.array([v[i] for v in values]) for i, name in enumerate(CONSTRAINTS)}

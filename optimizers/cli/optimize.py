@@ -28,8 +28,8 @@ from catenary_env.cli.progress import LOG_INTERVAL
 from catenary_env.errors import MissingDependency, UsageError
 
 from .. import ga, nevergrad_adapters  # noqa: F401  (register the built-in optimisers)
-from ..base import OPTIMIZERS, OptimizationResult, get_optimizer
-from ..plugins import load_plugins
+from ..base import OPTIMIZERS, OptimizationResult
+from ..plugins import get_optimizer, load_plugins
 
 __all__ = ["DEFAULT_STORE", "DESCRIPTION", "add_arguments", "add_parser", "run"]
 
