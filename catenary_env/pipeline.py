@@ -130,6 +130,10 @@ class Evaluation:
     acceptance : Acceptance or None
         The EN 50367 acceptance block of the passage (docs/acceptance.md); None when no passage was
         simulated.
+    constraints : tuple of float
+        The values of the feasibility constraints named in :data:`CONSTRAINTS`, in that order; the design
+        is feasible when every one is <= 0 (docs/model.md, 'Statistics and feasibility'). NaN where not
+        computed: every one when shape-finding failed, the contact loss when no passage was simulated.
     """
 
     feasible: bool
@@ -142,9 +146,16 @@ class Evaluation:
     trace_position: tuple[float, ...] = ()
     trace_force: tuple[float, ...] = ()
     acceptance: Acceptance | None = None
+    constraints: tuple[float, ...] = ()
 
 
 TRACE_POINTS = 1000
+
+CONSTRAINTS = ("dropper_compression_N", "dropper_length_shortfall_m", "contact_loss_percent")
+"""The feasibility constraints of :attr:`Evaluation.constraints`, each feasible when <= 0: the largest
+compression of a dropper at equilibrium over the section (N, minus the smallest dropper force), the
+largest shortfall of an unstretched dropper length (m, minus the shortest length) and the share of the
+analysis section's time in which contact is lost (%)."""
 
 
 @dataclass(frozen=True)
@@ -424,11 +435,15 @@ def evaluate_unchecked(
     try:
         static = _find_static(catenary, design, fidelity, deviations)
     except ShapeFindingError as error:
-        return Evaluation(False, f"static: {error}", None, (), (), force, time.perf_counter() - start)
+        unknown = (math.nan,) * len(CONSTRAINTS)
+        wall_time = time.perf_counter() - start
+        return Evaluation(False, f"static: {error}", None, (), (), force, wall_time, constraints=unknown)
     lengths, forces = _central_span(static, design)
     reason = static.infeasibility() or buildability_violation(static, buildability)
     if reason:
-        return Evaluation(False, reason, None, lengths, forces, force, time.perf_counter() - start)
+        wall_time = time.perf_counter() - start
+        constraints = _constraints(static, math.nan)
+        return Evaluation(False, reason, None, lengths, forces, force, wall_time, constraints=constraints)
     sim = run_passage(static, pantograph, speed, fidelity, force, statistics_only=True)
     stats = sim.statistics
     if stats.contact_loss_percent > 0.0:
@@ -436,10 +451,28 @@ def evaluate_unchecked(
             f"dynamic: contact lost {stats.contact_loss_percent:.3f} % of the time in the analysis section"
         )
     position, filtered = _trace(sim)
-    elapsed = time.perf_counter() - start
+    constraints = _constraints(static, stats.contact_loss_percent)
+    wall_time = time.perf_counter() - start
     return Evaluation(
-        not reason, reason, stats, lengths, forces, force, elapsed, position, filtered, sim.acceptance
+        not reason,
+        reason,
+        stats,
+        lengths,
+        forces,
+        force,
+        wall_time,
+        position,
+        filtered,
+        acceptance=sim.acceptance,
+        constraints=constraints,
     )
+
+
+def _constraints(static: StaticSolution, contact_loss_percent: float) -> tuple[float, ...]:
+    """The values of :data:`CONSTRAINTS` (feasible when <= 0)."""
+    compression = -float(np.min(static.dropper_forces))
+    shortfall = -float(np.min(static.dropper_lengths))
+    return compression, shortfall, float(contact_loss_percent)
 
 
 def _trace(sim: Simulation) -> tuple[tuple[float, ...], tuple[float, ...]]:

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 set -euo pipefail
 # The full studies of docs/problems.md, 'Experiments': the six design studies (B1 and SW1 first, the
-# headline), then the optimiser comparison and the RL studies of B1 and SW1 in two lanes, each a single
+# headline), then the optimiser comparison (six problems) and the RL studies of B1 and SW1 in two lanes, each a single
 # process on one core (PPO steps its environment in one process), then both studies once more over both
 # problems, which replays every run from the store (nothing is simulated again) and writes their combined
 # results, and the report. A simulation of SW1 costs about 1.5 times one of B1 (and B1's comparison meets
@@ -9,7 +9,8 @@ set -euo pipefail
 # optimiser: each lane finishes its share of the comparison, the headline, at about the same time, then
 # runs the RL studies of one problem.
 # Each command resumes from OUT/runs.sqlite, so this script can be killed and started again at any time;
-# it takes about ten hours on two cores (docs/performance.md, 'The full studies').
+# it takes about 35 hours on two cores (docs/performance.md, 'The full studies' and 'The full protocol of the
+# optimiser benchmark').
 # Usage: experiments/full_studies.sh [OUT] [WORKERS]
 OUT="${1:-results}"
 WORKERS="${2:-2}"
@@ -21,14 +22,14 @@ python -m experiments.design_studies --full --problems B2 SW2 B3 SW3 --workers "
 study() {  # study NAME ARGS...: one study in full on one core
     python -m "experiments.$1" --full "${@:2}" --workers 1 --out "$OUT"
 }
-{
-    study optimizer_comparison --problems B1
-    study optimizer_comparison --problems SW1 --optimizers ppo
+{  # the comparison's full protocol (docs/performance.md, 'The full protocol of the optimiser benchmark')
+    study optimizer_comparison --problems B1 B2 B3
+    study optimizer_comparison --problems SW1 SW2 SW3 --optimizers gp ppo
     study rl_studies --problems B1
 } > "$OUT/lane-1.log" 2>&1 &
 one=$!
 {
-    study optimizer_comparison --problems SW1 --optimizers ga cma de pso random ngopt
+    study optimizer_comparison --problems SW1 SW2 SW3 --optimizers ga cma de pso random ngopt tpe
     study rl_studies --problems SW1
 } > "$OUT/lane-2.log" 2>&1 &
 two=$!
@@ -37,6 +38,6 @@ wait "$one" || status=1
 wait "$two" || status=1
 [ "$status" -eq 0 ] || { echo "a lane failed: see $OUT/lane-1.log and $OUT/lane-2.log" >&2; exit 1; }
 
-python -m experiments.optimizer_comparison --full --workers "$WORKERS" --out "$OUT"
+python -m experiments.optimizer_comparison --full --workers "$WORKERS" --out "$OUT"  # the six problems
 python -m experiments.rl_studies --full --workers "$WORKERS" --out "$OUT"
 python -m catenary_env.cli report --out "$OUT"

@@ -9,18 +9,20 @@ format), written here without ``ioh``, which the project does not depend on. Per
 The JSON holds the problem, the algorithm and one entry per run: ``instance``, ``evals`` (the run's
 length), ``best`` (``evals``, ``y``, ``x`` of its best point) and the run attribute ``seed``. The ``.dat``
 file holds one block per run, in the JSON's order: a header line ``evaluations raw_y``, then a line
-``E Y`` each time the run improved (``Y`` its σ, ten decimals, at the ``E``-th evaluation), and a last
-line at the run's last evaluation, as the Analyzer logger writes (its default trigger ``on_improvement``).
+``E Y`` for every evaluation ``E`` = 1, 2, ... of the run (``Y`` its σ, ten decimals), as the Analyzer
+logger writes with the trigger ``ALWAYS``. IOH's readers (IOHanalyzer, ``iohinspector``) find the runs of a
+file by their first evaluation being 1, so every run's block starts at evaluation 1.
 
 What is mapped how:
 
 - *evaluation* = a simulation charged to the run (docs/problems.md, 'Optimisers': the first evaluation of
   each distinct design); a free repeat of a design is not an evaluation;
 - *raw_y* = σ of the contact force, N, minimised (``"maximization": false``);
-- an infeasible design is not an improvement and has no y: a run logs from its first feasible design, its
-  last line carries the last evaluation's σ, or the best σ so far where that evaluation was infeasible
-  (the same curve of best-so-far values, which is what IOHanalyzer reads); a run with no feasible design
-  is left out, as the logger leaves out a run that never improved;
+- an infeasible design (statically infeasible: no σ; or contact lost) is logged with
+  ``raw_y`` = :data:`INFEASIBLE_Y` = 10⁶ N, the penalty the nevergrad optimisers are told, above any σ:
+  the best-so-far curve IOHanalyzer computes is then the run's best feasible σ, and "no feasible design
+  yet" reads as 10⁶ N; a run that found no feasible design is logged too (its best is 10⁶ N), so that
+  every run is in the files;
 - *function id* = the problem's place in ``catenary_env.problems.PROBLEMS`` from 1 (B1 is 2, SW1 is 6; the
   synthetic problems of ``optimizers/synthetic.py`` follow them);
   *instance* = 1 for every run (the problem has no random instances); the seed is a run attribute.
@@ -28,8 +30,8 @@ What is mapped how:
 Examples
 --------
 >>> run = IOHRun(seed=0, evaluations=((1, None, ()), (2, 41.5, (0.0,)), (3, 40.0, (0.001,))))
->>> improvement_lines(run)
-[(2, 41.5), (3, 40.0)]
+>>> evaluation_lines(run)
+[(1, 1000000.0), (2, 41.5), (3, 40.0)]
 """
 
 from __future__ import annotations
@@ -41,8 +43,9 @@ from pathlib import Path
 
 __all__ = [
     "FORMAT_VERSION",
+    "INFEASIBLE_Y",
     "IOHRun",
-    "improvement_lines",
+    "evaluation_lines",
     "read_dat",
     "write_algorithm",
 ]
@@ -51,6 +54,9 @@ FORMAT_VERSION = "0.3.22"
 """The ``ioh`` release whose Analyzer output this layout was checked against (its ``version`` field)."""
 
 SUITE = "catenary-env"
+
+INFEASIBLE_Y = 1.0e6
+"""``raw_y`` of an infeasible evaluation, N (optimizers.nevergrad_adapters.INFEASIBLE_LOSS)."""
 
 
 @dataclass(frozen=True)
@@ -70,27 +76,16 @@ class IOHRun:
     evaluations: tuple[tuple[int, float | None, tuple[float, ...]], ...]
 
 
-def improvement_lines(run: IOHRun) -> list[tuple[int, float]]:
-    """The ``(evaluations, raw_y)`` lines of a run: each improvement, then its last evaluation."""
-    lines: list[tuple[int, float]] = []
-    best = float("inf")
-    for number, sigma, _ in run.evaluations:
-        if sigma is not None and sigma < best:
-            best = sigma
-            lines.append((number, sigma))
-    if lines and run.evaluations:
-        last_number, last_sigma, _ = run.evaluations[-1]
-        if lines[-1][0] != last_number:
-            lines.append((last_number, best if last_sigma is None else last_sigma))
-    return lines
+def evaluation_lines(run: IOHRun) -> list[tuple[int, float]]:
+    """The ``(evaluations, raw_y)`` lines of a run: every evaluation, an infeasible one at
+    :data:`INFEASIBLE_Y`."""
+    return [(number, INFEASIBLE_Y if sigma is None else sigma) for number, sigma, _ in run.evaluations]
 
 
-def _best(run: IOHRun) -> tuple[int, float, tuple[float, ...]] | None:
-    feasible = [e for e in run.evaluations if e[1] is not None]
-    if not feasible:
-        return None
-    number, sigma, x = min(feasible, key=lambda e: (e[1], e[0]))
-    return number, float(sigma or 0.0), x
+def _best(run: IOHRun) -> tuple[int, float, tuple[float, ...]]:
+    number, y, x = min(((n, s if s is not None else INFEASIBLE_Y, x) for n, s, x in run.evaluations),
+                       key=lambda e: (e[1], e[0]))  # fmt: skip
+    return number, float(y), x
 
 
 def write_algorithm(
@@ -103,11 +98,9 @@ def write_algorithm(
     runs: Sequence[IOHRun],
     attributes: dict[str, str] | None = None,
 ) -> Path | None:
-    """Write one algorithm's runs on one problem under ``root/algorithm``; return the JSON's path.
-
-    Returns None (and writes nothing) when no run found a feasible design.
-    """
-    kept = [run for run in runs if _best(run) is not None]
+    """Write one algorithm's runs on one problem under ``root/algorithm``; return the JSON's path (None,
+    and nothing written, without a run that has an evaluation)."""
+    kept = [run for run in runs if run.evaluations]
     if not kept:
         return None
     folder = Path(root) / algorithm
@@ -117,8 +110,8 @@ def write_algorithm(
     blocks = []
     entries = []
     for run in kept:
-        blocks.append("evaluations raw_y\n" + "".join(f"{e} {y:.10f}\n" for e, y in improvement_lines(run)))
-        number, sigma, x = _best(run)  # type: ignore[misc]
+        blocks.append("evaluations raw_y\n" + "".join(f"{e} {y:.10f}\n" for e, y in evaluation_lines(run)))
+        number, sigma, x = _best(run)
         entries.append(
             {
                 "instance": 1,

@@ -1,8 +1,9 @@
 """Study 4: which optimiser finds the smoothest design with the fewest simulations (docs/problems.md,
 'Experiments').
 
-The published study's GA, nevergrad's CMA-ES, DE, PSO, random search and NGOpt, and the PPO design policy, on
-B1 and SW1 at 300 km/h, each with the same budget of simulations and several seeds. Every run goes to one
+The published study's GA, nevergrad's CMA-ES, DE, PSO, random search and NGOpt, Optuna's TPE and Gaussian
+process, and the PPO design policy (and any optimiser an installed package plugs in), at 300 km/h, each with
+the same budget of simulations and several seeds. Every run goes to one
 run store (the studies' shared ``runs.sqlite`` in the output folder, or ``Config.store``) and is resumed
 from it: a study run again, or interrupted and restarted, replays what is stored and simulates only what
 is missing, and a design simulated by one run is served to the others from the store's cache (it is still
@@ -22,7 +23,8 @@ Outputs (``results/optimizers/``):
   one panel per problem;
 - ``ioh/``: the runs in the IOHprofiler format, for IOHanalyzer (:mod:`experiments.iohprofiler`).
 
-Settings. Full: the study fidelity, 300 simulations a run, 5 seeds, the GA's population of
+Settings. Full (the protocol of docs/problems.md, 'Reading the comparison'): the six problems with variables,
+the study fidelity, 300 simulations a run, 15 seeds on B1 and SW1 and 10 on the others, the GA's population of
 docs/problems.md ('Optimisers'), nevergrad's batches of 8, PPO as in :mod:`experiments.rl_studies`
 (rollouts of 32 steps, the policy starting at the reference design with a spread of 4 mm). Quick: the
 "test" fidelity, 12 simulations a run, 2 seeds, a GA population of 6 and PPO rollouts of 8 steps (a smoke
@@ -47,15 +49,17 @@ from typing import Any
 import numpy as np
 
 from catenary_env.problems import PROBLEMS as DESIGN_PROBLEMS
-from optimizers.base import OptimizationResult, get_optimizer
+from optimizers.base import OptimizationResult
 from optimizers.ga import GAOptions
-from optimizers.nevergrad_adapters import NevergradOptions, ngopt_fault
+from optimizers.nevergrad_adapters import ngopt_fault
+from optimizers.plugins import get_optimizer
 from optimizers.problem import GridSpace
 from optimizers.problem_registry import resolve_problem
 from optimizers.runner import optimize
 from optimizers.store import RunStore
 from optimizers.synthetic import SYNTHETIC_PROBLEMS
 
+from . import benchmark_views as bv
 from .common import (
     DEFAULT_OUT,
     STORE,
@@ -73,14 +77,23 @@ from .common import (
 from .design_evaluations import evaluate_designs, study_problem
 from .iohprofiler import runs_from_rows, write_algorithm
 from .model_stamp import catenaries_of, stamp_study
-from .rl_studies import policy_options, train_policy
+from .rl_studies import check_starts_at_reference, policy_options, train_policy
 
 NAME = "optimizers"
 PROBLEMS = ("B1", "SW1")
-OPTIMIZERS = ("ga", "cma", "de", "pso", "random", "ngopt", "ppo")
+"""The problems of the quick setting."""
+FULL_PROBLEMS = ("B1", "B2", "B3", "SW1", "SW2", "SW3")
+"""The problems of the full protocol: every problem with variables (docs/problems.md, 'Reading the
+comparison')."""
+FULL_SEEDS = {"B1": 15, "SW1": 15}
+"""Seeds per problem in the full protocol (:data:`FULL_OTHER_SEEDS` for the others)."""
+FULL_OTHER_SEEDS = 10
+OPTIMIZERS = ("ga", "cma", "de", "pso", "random", "ngopt", "tpe", "gp", "ppo")
 SPEED_KMH = 300.0
 TARGET = 0.02
 """Within 2 % of the best σ any run found on the problem."""
+DE_POPULATION = 30
+"""The size of nevergrad's DE first population here (its default, the "standard" population)."""
 
 
 @dataclass(frozen=True)
@@ -90,15 +103,17 @@ class Config:
     Attributes
     ----------
     full : bool
-        The study fidelity, 300 simulations a run, 5 seeds; else quick.
+        The full protocol: the study fidelity, 300 simulations a run, 15 seeds on B1 and SW1 and 10 on the
+        other problems; else quick (2 seeds).
     out : Path
         The results folder; the study writes into ``out/optimizers``.
     workers : int
         Local worker processes for the simulations of a batch (PPO steps its env in this process).
     store : Path or None
         The run store; default ``out/runs.sqlite``, shared by the studies.
-    problems : tuple of str
-        The design problems compared; a synthetic problem (``optimizers/synthetic.py``) runs the study's
+    problems : tuple of str or None
+        The design problems compared (None: :data:`FULL_PROBLEMS` in full, :data:`PROBLEMS` quick); a
+        synthetic problem (``optimizers/synthetic.py``) runs the study's
         machinery in microseconds an evaluation, with every optimiser but PPO (which needs a design env).
     optimizers : tuple of str
         The optimisers run (default all of :data:`OPTIMIZERS`). Two processes given disjoint sets share
@@ -110,8 +125,12 @@ class Config:
     out: Path = DEFAULT_OUT
     workers: int = 1
     store: Path | None = None
-    problems: tuple[str, ...] = PROBLEMS
+    problems: tuple[str, ...] = None  # type: ignore[assignment]  (set in __post_init__)
     optimizers: tuple[str, ...] = OPTIMIZERS
+
+    def __post_init__(self) -> None:
+        if self.problems is None:
+            object.__setattr__(self, "problems", FULL_PROBLEMS if self.full else PROBLEMS)
 
     @property
     def fidelity(self) -> str:
@@ -123,7 +142,14 @@ class Config:
 
     @property
     def seeds(self) -> tuple[int, ...]:
-        return (0, 1, 2, 3, 4) if self.full else (0, 1)
+        """The seeds of B1 and SW1 (the most of any problem)."""
+        return self.seeds_for("B1")
+
+    def seeds_for(self, problem: str) -> tuple[int, ...]:
+        """The seeds of a problem's runs."""
+        if not self.full:
+            return (0, 1)
+        return tuple(range(FULL_SEEDS.get(problem, FULL_OTHER_SEEDS)))
 
     def options(self, optimizer: str) -> Any:
         """The hyper-parameters of an optimiser in this setting."""
@@ -131,7 +157,7 @@ class Config:
             return GAOptions() if self.full else GAOptions(population_size=6)
         if optimizer == "ppo":
             return policy_options(32 if self.full else 8)
-        return NevergradOptions()
+        return get_optimizer(optimizer).options_class()  # its documented defaults, a plug-in's too
 
 
 def main(config: Config) -> Path:
@@ -155,7 +181,7 @@ def main(config: Config) -> Path:
                 }
             )
             for optimizer in config.optimizers:
-                for seed in config.seeds:
+                for seed in config.seeds_for(problem):
                     result, note = _run(store, config, optimizer, problem, seed)
                     if result is None:
                         run_rows.append(_not_run_row(config, optimizer, problem, seed, note))
@@ -178,6 +204,10 @@ def _run(
     """One run (resumed from the store), or None and why it cannot run here."""
     options = config.options(optimizer)
     if optimizer == "ppo":
+        try:  # the policy starts at the reference design only where the bounds are centred on it
+            check_starts_at_reference(problem)
+        except ValueError as error:
+            return None, str(error)
         _, result = train_policy(
             store, problem, config.budget, seed, options, config.fidelity, speed_kmh=SPEED_KMH,
             quiet=not config.full,
@@ -401,11 +431,100 @@ def report(folder: Path) -> str:
     notes += sorted(
         {f"- {r['optimizer']} on {r['problem']}: not run: {r['note']}" for r in runs if r not in done}
     )
-    text = table + "\n\n" + "\n".join(notes)
+    notes += identical_histories(evaluations, runs)
+    text = table + "\n\n" + "\n".join(notes) + "\n\n" + views(folder, curves, runs)
     (folder / "optimizers.md").write_text(text + "\n", encoding="utf-8")
     _figure(curves, reference, folder / "convergence.png")
     _write_ioh(folder / "ioh", evaluations, runs)
     return text
+
+
+def identical_histories(evaluations: list[dict[str, Any]], runs: list[dict[str, Any]]) -> list[str]:
+    """Notes on pairs of optimisers whose runs proposed the same designs on every problem and seed, and why
+    (DE's first population is a random sample drawn from the same seed as random search's)."""
+    designs: dict[tuple[str, str, int], list[str]] = {}
+    for row in evaluations:
+        designs.setdefault((row["optimizer"], row["problem"], int(row["seed"])), []).append(str(row["x_m"]))
+    names = list(dict.fromkeys(r["optimizer"] for r in runs if r["status"] == "done"))
+    notes = []
+    for i, a in enumerate(names):
+        for b in names[i + 1 :]:
+            keys = [(p, s) for (o, p, s) in designs if o == a]
+            if keys and all(designs.get((b, p, s)) == designs[(a, p, s)] for p, s in keys):
+                why = (
+                    f" (nevergrad's DE starts from a random population of {DE_POPULATION}, drawn from the "
+                    "seed as random search draws its designs: a budget within it cannot tell them apart)"
+                    if {a, b} == {"de", "random"}
+                    else ""
+                )
+                notes.append(f"- {a} and {b}: identical histories on every problem and seed{why}")
+    return notes
+
+
+def views(folder: Path, curves: dict[str, dict[str, np.ndarray]], runs: list[dict[str, Any]]) -> str:
+    """The fixed-budget, fixed-target and rank views (:mod:`experiments.benchmark_views`); writes
+    ``fixed_budget.csv``, ``fixed_target.csv``, ``ranks.csv`` and ``ecdf.png``; returns their Markdown."""
+    done = [r for r in runs if r["status"] == "done"]
+    lengths: dict[str, dict[str, list[int]]] = {}
+    finals: dict[str, dict[tuple[str, int], float]] = {}
+    for r in done:  # in the order of summarise's curves
+        lengths.setdefault(r["problem"], {}).setdefault(r["optimizer"], []).append(int(r["n_simulations"]))
+    for problem, by_optimizer in curves.items():
+        seeds = {
+            o: [int(r["seed"]) for r in done if r["problem"] == problem and r["optimizer"] == o]
+            for o in by_optimizer
+        }
+        for optimizer, stack in by_optimizer.items():
+            for seed, curve in zip(seeds[optimizer], stack, strict=True):
+                finals.setdefault(optimizer, {})[(problem, seed)] = float(curve[-1])
+    best = _best_known(curves, done)
+    budget_rows = bv.fixed_budget_rows(curves)
+    target_rows = bv.fixed_target_rows(curves, lengths, best)
+    write_csv(folder / "fixed_budget.csv", budget_rows)
+    parts = ["### Fixed budget: best σ (N), median [IQR] of the runs", markdown_table(
+        budget_rows, [("problem", "problem", "s"), ("optimizer", "optimiser", "s"), ("runs", "runs", "d")]
+        + [(k, f"after {k[3:]} simulations", "s") for k in budget_rows[0] if k.startswith("at_")],
+    )] if budget_rows else []  # fmt: skip
+    if target_rows:
+        write_csv(folder / "fixed_target.csv", target_rows)
+        columns = [("problem", "problem", "s"), ("optimizer", "optimiser", "s")]
+        columns += [(f"cell_{100 * t:g}", f"ERT to {100 * t:g} % (runs reached)", "s") for t in bv.TARGETS]
+        targets = ", ".join(f"{p} {s:.2f} N" for p, s in best.items())
+        parts += [f"### Fixed target: simulations to come within x % of the best-known σ ({targets})",
+                  markdown_table(target_rows, columns)]  # fmt: skip
+        budget = int(max(int(r["budget"]) for r in done))
+        bv.ecdf_figure(bv.ecdf(curves, lengths, best, budget), list(best), folder / "ecdf.png")
+    if len(finals) >= 3:
+        parts.append(_rank_section(folder, finals))
+    return "\n\n".join(parts)
+
+
+def _best_known(curves: dict[str, Any], done: list[dict[str, Any]]) -> dict[str, float]:
+    """The best-known σ of the problems whose runs are on its fidelity (not the quick setting's test
+    model)."""
+    best = {}
+    for problem in curves:
+        known = DESIGN_PROBLEMS[problem].best_known if problem in DESIGN_PROBLEMS else None
+        if known and all(r["fidelity"] == known.fidelity for r in done if r["problem"] == problem):
+            best[problem] = known.sigma_N
+    return best
+
+
+def _rank_section(folder: Path, finals: dict[str, dict[tuple[str, int], float]]) -> str:
+    friedman, pairs = bv.rank_tests(finals)
+    write_csv(folder / "ranks.csv", pairs)
+    ranks = sorted(friedman["mean_ranks"].items(), key=lambda item: item[1])
+    significant = [f"{p['better']} better than {p['b'] if p['better'] == p['a'] else p['a']} "
+                   f"(p = {p['p_holm']:.3f})" for p in pairs if p["significant"]]  # fmt: skip
+    return "\n".join([
+        f"### Ranks over {friedman['blocks']} blocks (problem, seed) by final best σ",
+        "",
+        "mean rank (1 = best): " + ", ".join(f"{name} {rank:.2f}" for name, rank in ranks),
+        "",
+        f"Friedman χ² = {friedman['statistic']:.2f}, p = {friedman['p_value']:.2g}; pairwise Wilcoxon "
+        f"signed-rank tests with Holm's correction at {bv.ALPHA:g}: "
+        + ("; ".join(significant) if significant else "no pair differs significantly"),
+    ])  # fmt: skip
 
 
 def _figure(curves: dict[str, dict[str, np.ndarray]], reference: dict[str, float], path: Path) -> None:
@@ -453,17 +572,32 @@ def _write_ioh(root: Path, evaluations: list[dict[str, Any]], runs: list[dict[st
             )  # fmt: skip
 
 
+def _optimizer_name(name: str) -> str:
+    """``--optimizers`` entries: ppo or a registered (or plugged-in) optimiser; argparse's one line else."""
+    if name != "ppo":
+        try:
+            get_optimizer(name)
+        except KeyError as error:
+            raise argparse.ArgumentTypeError(str(error.args[0])) from None
+    return name
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The study's options (``catenary experiment optimizers`` and its ``python -m`` entry point)."""
-    add_full_option(parser, "the study fidelity, 300 simulations a run, 5 seeds (hours)")
+    add_full_option(
+        parser,
+        "the study fidelity, 300 simulations a run, 15 seeds on B1 and SW1, 10 on the others "
+        "(about 27 h on two cores for the six problems, docs/performance.md)",
+    )
     parser.add_argument(
-        "--problems", nargs="+", default=list(PROBLEMS), choices=list(DESIGN_PROBLEMS), metavar="NAME",
-        help=f"the design problems, of {' '.join(DESIGN_PROBLEMS)} (default: {' '.join(PROBLEMS)})",
+        "--problems", nargs="+", default=None, choices=list(DESIGN_PROBLEMS), metavar="NAME",
+        help=f"the design problems, of {' '.join(DESIGN_PROBLEMS)} (default: {' '.join(FULL_PROBLEMS)} with "
+        f"--full, else {' '.join(PROBLEMS)})",
     )  # fmt: skip
     parser.add_argument(
-        "--optimizers", nargs="+", default=list(OPTIMIZERS), choices=list(OPTIMIZERS), metavar="NAME",
-        help=f"the optimisers, of {' '.join(OPTIMIZERS)} (default: all); disjoint sets in two processes "
-        "share a problem's runs",
+        "--optimizers", nargs="+", default=list(OPTIMIZERS), type=_optimizer_name, metavar="NAME",
+        help=f"the optimisers, of {' '.join(OPTIMIZERS)} or an installed package's (docs/problems.md, "
+        "'Your own optimiser'; default: all); disjoint sets in two processes share a problem's runs",
     )  # fmt: skip
     add_workers_option(parser, 1, "the simulations of a batch (PPO steps its env in this process)")
     add_out_option(parser)

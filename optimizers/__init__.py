@@ -1,9 +1,10 @@
 """Optimisers for the catenary design problems (docs/problems.md, 'Optimisers'): the published study's GA,
-nevergrad, RL design policies.
+nevergrad, Optuna's model-based samplers, RL design policies, and any an installed package declares in the
+``catenary_env.optimizers`` entry-point group (:mod:`optimizers.plugins`).
 
 Every ask / tell optimiser is registered in :data:`OPTIMIZERS` and run by :func:`optimize`, which owns
 the budget, the run store (resume, cache) and the parallel evaluation. The RL design policy is trained
-by :func:`optimizers.rl.train_design_policy` (needs stable-baselines3). nevergrad, Dask and
+by :func:`optimizers.rl.train_design_policy` (needs stable-baselines3). nevergrad, Optuna, Dask and
 stable-baselines3 are imported only when used.
 
 Examples
@@ -14,7 +15,7 @@ Examples
 True
 """
 
-from . import ga, nevergrad_adapters  # noqa: F401  (register the optimisers)
+from . import ga, nevergrad_adapters, optuna_adapters  # noqa: F401  (register the optimisers)
 from .base import (
     OPTIMIZERS,
     EvaluationRecord,

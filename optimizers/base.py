@@ -38,7 +38,7 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from catenary_env.errors import UnknownNameError, UsageError
+from catenary_env.errors import UsageError
 from catenary_env.registry import Registry
 
 from .problem import GridSpace
@@ -50,7 +50,6 @@ __all__ = [
     "Optimizer",
     "OptimizerRegistry",
     "OptimizerSpec",
-    "get_optimizer",
     "register_optimizer",
 ]
 
@@ -79,6 +78,12 @@ class EvaluationRecord:
         Counted against the budget: the run's first evaluation of this design.
     speed_kmh : float
         Train speed, km/h.
+    constraints : tuple of float
+        The problem's constraint values (feasible when all are <= 0; NaN where not computed); empty where
+        the problem gives none, or the store that served it predates them.
+    statistics : tuple of float
+        The problem's other statistics of the design (for a catenary problem every field of
+        ``ContactStatistics``); empty where not simulated dynamically, or not stored.
     """
 
     index: int
@@ -90,6 +95,8 @@ class EvaluationRecord:
     cached: bool
     charged: bool
     speed_kmh: float
+    constraints: tuple[float, ...] = ()
+    statistics: tuple[float, ...] = ()
 
     @property
     def loss(self) -> float:
@@ -156,9 +163,13 @@ class OptimizationResult:
     best_speed_kmh: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        """A JSON-ready dict (history entries as dicts)."""
+        """A JSON-ready dict (history entries as dicts; a constraint value or statistic not computed, NaN,
+        as None)."""
         data = dataclasses.asdict(self)
         data["history"] = [dataclasses.asdict(record) for record in self.history]
+        for entry in data["history"]:
+            for key in ("constraints", "statistics"):
+                entry[key] = [None if np.isnan(v) else v for v in entry[key]]
         return data
 
 
@@ -226,8 +237,15 @@ class Optimizer(abc.ABC):
         self.num_ask += len(points)
         return self._pending.copy()
 
-    def tell(self, points: ArrayLike, losses: ArrayLike) -> None:
-        """Tell the losses of the batch last asked: σ in N, +inf for an infeasible design.
+    def tell(
+        self,
+        points: ArrayLike,
+        losses: ArrayLike,
+        constraints: Sequence[Sequence[float]] | None = None,
+    ) -> None:
+        """Tell the losses of the batch last asked: σ in N, +inf for an infeasible design; optionally the
+        constraint values of each point (:attr:`EvaluationRecord.constraints`), which a constraint-aware
+        optimiser uses (:meth:`_internal_tell_constrained`) and the others ignore.
 
         Raises
         ------
@@ -244,9 +262,14 @@ class Optimizer(abc.ABC):
             raise RuntimeError(f"{self.name}: tell exactly the batch last asked")
         if values.shape != (len(batch),) or np.any(np.isnan(values)):
             raise RuntimeError(f"{self.name}: need one loss (not NaN) per point, got {values.shape}")
+        if constraints is not None and len(constraints) != len(batch):
+            raise RuntimeError(f"{self.name}: need one tuple of constraint values per point")
         self._pending = None
         self.num_tell += len(batch)
-        self._internal_tell(batch, values)
+        if constraints is None:
+            self._internal_tell(batch, values)
+        else:
+            self._internal_tell_constrained(batch, values, tuple(tuple(map(float, c)) for c in constraints))
 
     @abc.abstractmethod
     def _internal_ask(self) -> NDArray[np.int64]:
@@ -255,6 +278,16 @@ class Optimizer(abc.ABC):
     @abc.abstractmethod
     def _internal_tell(self, points: NDArray[np.int64], losses: NDArray[np.float64]) -> None:
         """Learn from the losses of the batch last proposed (+inf: infeasible)."""
+
+    def _internal_tell_constrained(
+        self,
+        points: NDArray[np.int64],
+        losses: NDArray[np.float64],
+        constraints: tuple[tuple[float, ...], ...],
+    ) -> None:
+        """Learn from the losses and the constraint values (per point; feasible when all are <= 0, NaN
+        where not computed, empty where unknown); by default from the losses alone."""
+        self._internal_tell(points, losses)
 
 
 class OptimizerSpec(NamedTuple):
@@ -291,10 +324,3 @@ OPTIMIZERS = OptimizerRegistry()
 def register_optimizer(spec: OptimizerSpec) -> OptimizerSpec:
     """Add an optimiser to :data:`OPTIMIZERS`; ValueError if the name is taken."""
     return OPTIMIZERS.register(spec)
-
-
-def get_optimizer(name: str) -> OptimizerSpec:
-    """The registry entry ``name``; KeyError lists the names available."""
-    if name not in OPTIMIZERS:
-        raise UnknownNameError(f"unknown optimizer {name!r}; available: {', '.join(sorted(OPTIMIZERS))}")
-    return OPTIMIZERS[name]

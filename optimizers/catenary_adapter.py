@@ -13,11 +13,16 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from catenary_env.analysis.statistics import ContactStatistics
+from catenary_env.pipeline import CONSTRAINTS
 from catenary_env.problems import evaluate_problem, get_problem
 
 from .problem import Outcome, SimulateFunction
 
-__all__ = ["CatenaryProblem", "catenary_problem", "simulate_catenary_design"]
+__all__ = ["STATISTICS", "CatenaryProblem", "catenary_problem", "simulate_catenary_design"]
+
+STATISTICS = tuple(ContactStatistics.__dataclass_fields__)
+"""The statistics an outcome of a catenary problem carries (``Outcome.statistics``), in this order."""
 
 
 def simulate_catenary_design(
@@ -39,13 +44,23 @@ def simulate_catenary_design(
     evaluation = evaluate_problem(problem_name, tuple(x), float(speed_kmh), fidelity)
     statistics = evaluation.statistics
     sigma = None if statistics is None else float(statistics.std)
-    return Outcome(bool(evaluation.feasible), sigma, str(evaluation.reason), float(evaluation.wall_time))
+    constraints = tuple(float(v) for v in evaluation.constraints)
+    values = () if statistics is None else tuple(float(getattr(statistics, n)) for n in STATISTICS)
+    return Outcome(
+        bool(evaluation.feasible),
+        sigma,
+        str(evaluation.reason),
+        float(evaluation.wall_time),
+        constraints,
+        values,
+    )
 
 
 @dataclass(frozen=True, eq=False)
 class CatenaryProblem:
     """A catenary design problem (docs/problems.md) as a :class:`GridProblem` (built by
-    :func:`catenary_problem`)."""
+    :func:`catenary_problem`); its outcomes carry the constraint values of
+    :data:`catenary_env.pipeline.CONSTRAINTS` and the contact-force statistics of :data:`STATISTICS`."""
 
     name: str
     variable_names: tuple[str, ...]
@@ -53,6 +68,8 @@ class CatenaryProblem:
     upper: NDArray[np.float64]
     step: NDArray[np.float64]
     model_fingerprint: str = ""
+    constraint_names: tuple[str, ...] = CONSTRAINTS
+    statistic_names: tuple[str, ...] = STATISTICS
 
     @property
     def simulate(self) -> SimulateFunction:

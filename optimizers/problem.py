@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from catenary_env.problems.grid import DesignGrid
 
-__all__ = ["GridProblem", "GridSpace", "Outcome", "SimulateFunction"]
+__all__ = ["GridProblem", "GridSpace", "Outcome", "SimulateFunction", "constraint_names", "statistic_names"]
 
 
 class Outcome(NamedTuple):
@@ -49,12 +49,20 @@ class Outcome(NamedTuple):
         Empty when feasible, otherwise why not.
     wall_time : float
         Seconds the simulation took.
+    constraints : tuple of float
+        The problem's constraint values (its ``constraint_names``), feasible when all are <= 0; NaN where
+        not computed, empty where the problem or the store that served the outcome gives none.
+    statistics : tuple of float
+        The problem's other statistics of the outcome (its ``statistic_names``; for a catenary problem
+        every field of ``ContactStatistics``, N, % and m), empty where not simulated or not given.
     """
 
     feasible: bool
     sigma: float | None
     reason: str
     wall_time: float
+    constraints: tuple[float, ...] = ()
+    statistics: tuple[float, ...] = ()
 
 
 SimulateFunction = Callable[[tuple[float, ...], float, str], Outcome]
@@ -76,6 +84,10 @@ class GridProblem(Protocol):
         Bounds and grid step of each variable, physical units (m); the bounds lie on the grid.
     simulate : SimulateFunction
         Picklable ``simulate(x, speed_kmh, fidelity) -> Outcome``; deterministic.
+
+    A problem may also name the values of its outcomes' ``constraints`` in ``constraint_names`` and their
+    ``statistics`` in ``statistic_names`` (tuples of str; :func:`constraint_names` and
+    :func:`statistic_names` read them, empty when absent).
     """
 
     @property
@@ -147,3 +159,13 @@ class GridSpace(DesignGrid):
                 f"grid point {index.tolist()} is not on the grid 0 <= k < {self.n_levels.tolist()}"
             )
         return self.from_index(index)
+
+
+def constraint_names(problem: GridProblem) -> tuple[str, ...]:
+    """The names of a problem's constraint values (:attr:`Outcome.constraints`), empty if it names none."""
+    return tuple(getattr(problem, "constraint_names", ()))
+
+
+def statistic_names(problem: GridProblem) -> tuple[str, ...]:
+    """The names of a problem's statistics (:attr:`Outcome.statistics`), empty if it names none."""
+    return tuple(getattr(problem, "statistic_names", ()))

@@ -33,9 +33,10 @@ from numpy.typing import NDArray
 
 from catenary_env.cli.progress import LOG_INTERVAL, ProgressDisplay
 
-from . import ga, nevergrad_adapters  # noqa: F401  (register the built-in optimisers)
-from .base import EvaluationRecord, OptimizationResult, Optimizer, get_optimizer
+from . import ga, nevergrad_adapters, optuna_adapters  # noqa: F401  (register the built-in optimisers)
+from .base import EvaluationRecord, OptimizationResult, Optimizer
 from .evaluation import EvaluationBackend, make_backend
+from .plugins import get_optimizer
 from .problem import GridProblem, GridSpace, Outcome
 from .problem_registry import resolve_problem
 from .recorder import RunRecorder, open_run, options_json, package_version
@@ -152,7 +153,7 @@ def _run(engine: Optimizer, loop: _BatchEvaluator, recorder: RunRecorder, budget
             recorder.append(record)
         if len(records) < len(points):  # cut short by the budget or the cap: the batch cannot be told
             return "budget" if recorder.n_charged >= budget else "max_evaluations"
-        engine.tell(points, [record.loss for record in records])
+        engine.tell(points, [record.loss for record in records], [record.constraints for record in records])
 
 
 class _BatchEvaluator:
@@ -213,7 +214,11 @@ class _BatchEvaluator:
         stored = self.recorder.stored(index, key)
         if stored is not None:
             record = stored.record
-            self.seen.setdefault(key, Outcome(record.feasible, record.sigma, record.reason, record.wall_time))
+            self.seen.setdefault(
+                key,
+                Outcome(record.feasible, record.sigma, record.reason, record.wall_time, record.constraints,
+                        record.statistics),
+            )  # fmt: skip
             return record, int(record.charged)
         if key in self.seen:
             return self._record(index, x, self.seen[key], cached=True, charged=False, key=key), 0
@@ -270,6 +275,8 @@ class _BatchEvaluator:
             cached=cached,
             charged=charged,
             speed_kmh=self.speed_kmh,
+            constraints=tuple(float(v) for v in outcome.constraints),
+            statistics=tuple(float(v) for v in outcome.statistics),
         )
         self.recorder.persist(record, key)
         return record

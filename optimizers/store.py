@@ -52,8 +52,17 @@ __all__ = ["APPLICATION_ID", "SCHEMA_VERSION", "RunConfig", "RunStore", "StoreEr
 APPLICATION_ID = 0x43415445
 """SQLite ``application_id`` of a run store: the bytes ``CATE``."""
 
-SCHEMA_VERSION = 1
-"""SQLite ``user_version`` of the schema this code reads and writes."""
+SCHEMA_VERSION = 2
+"""SQLite ``user_version`` of the schema this code reads and writes. Version 2 added the evaluations'
+``constraints`` and ``statistics`` (JSON lists of the problem's constraint values and contact-force
+statistics); a version-1 store is upgraded in place when opened for writing (the columns added, its old rows
+without those values) and read as it is when opened read-only."""
+
+_ADDED_IN_2 = ("constraints", "statistics")
+"""The evaluations' columns that schema version 2 added."""
+
+_UPGRADABLE = {1: [f"ALTER TABLE evaluations ADD COLUMN {column} TEXT" for column in _ADDED_IN_2]}
+"""The statements that bring a store of an older schema version to :data:`SCHEMA_VERSION`."""
 
 _SQLITE_HEADER = b"SQLite format 3\x00"
 
@@ -90,6 +99,8 @@ CREATE TABLE evaluations (
     charged INTEGER NOT NULL,
     reward REAL,
     created_at TEXT NOT NULL,
+    constraints TEXT,
+    statistics TEXT,
     PRIMARY KEY (run_id, idx)
 );
 CREATE INDEX evaluations_cache ON evaluations (problem, design_key, speed_kmh, fidelity, source);
@@ -211,11 +222,19 @@ class RunStore:
                 "give another --store path"
             )
         version = connection.execute("PRAGMA user_version").fetchone()[0]
-        if version != SCHEMA_VERSION:
+        if version != SCHEMA_VERSION and version not in _UPGRADABLE:
             connection.close()
             raise StoreError(
-                f"{self.path}: run store schema version {version}, this code reads version {SCHEMA_VERSION}"
+                f"{self.path}: run store schema version {version}, this code reads versions "
+                f"{', '.join(map(str, [*_UPGRADABLE, SCHEMA_VERSION]))}: use the catenary-env that made it"
             )
+        if version != SCHEMA_VERSION and not self.read_only:
+            with connection:
+                for statement in _UPGRADABLE[version]:
+                    connection.execute(statement)
+                connection.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+            version = SCHEMA_VERSION
+        self.schema_version = int(version)
         self._check_integrity()
         if self.path != ":memory:" and not self.read_only:
             # WAL: a committed evaluation survives a SIGKILL; NORMAL sync is durable against a process
@@ -234,6 +253,8 @@ class RunStore:
             )
         for table, columns in _schema_columns().items():
             found = {row[1] for row in self._connection.execute(f"PRAGMA table_info({table})")}
+            if self.schema_version == 1:  # read-only, not upgraded
+                found |= set(_ADDED_IN_2) if table == "evaluations" and found else set()
             if not columns <= found:
                 self._connection.close()
                 missing = (
@@ -334,12 +355,13 @@ class RunStore:
         with self._connection:
             self._connection.execute(
                 "INSERT INTO evaluations (run_id, idx, problem, design_key, speed_kmh, fidelity, source, x, "
-                "feasible, sigma, reason, wall_time, cached, charged, reward, created_at) "
-                "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                "feasible, sigma, reason, wall_time, cached, charged, reward, created_at, constraints, "
+                "statistics) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
                 (
                     run_id, record.index, problem, _key_text(design_key), float(record.speed_kmh), fidelity,
                     source, json.dumps(list(record.x)), int(record.feasible), record.sigma, record.reason,
                     float(record.wall_time), int(record.cached), int(record.charged), reward, _now(),
+                    json.dumps(list(record.constraints)), json.dumps(list(record.statistics)),
                 ),
             )  # fmt: skip
 
@@ -347,7 +369,7 @@ class RunStore:
         """The stored evaluations of a run by index (gaps where evaluations were lost in flight)."""
         rows = self._connection.execute(
             "SELECT idx, x, feasible, sigma, reason, wall_time, cached, charged, speed_kmh, design_key, "
-            "reward FROM evaluations WHERE run_id = ? ORDER BY idx",
+            f"reward, {self._added()} FROM evaluations WHERE run_id = ? ORDER BY idx",
             (run_id,),
         ).fetchall()
         stored: dict[int, StoredEvaluation] = {}
@@ -372,13 +394,15 @@ class RunStore:
         """The cached outcome of a design (any run of this store), or None if never simulated here;
         ``source="env"``: as an RL run's env step of any env (for its simulation's time, not its reward)."""
         row = self._connection.execute(
-            "SELECT feasible, sigma, reason, wall_time FROM evaluations WHERE problem = ? AND design_key = ? "
-            "AND speed_kmh = ? AND fidelity = ? AND source = ? ORDER BY cached LIMIT 1",
+            f"SELECT feasible, sigma, reason, wall_time, {self._added()} FROM evaluations WHERE "
+            "problem = ? AND design_key = ? AND speed_kmh = ? AND fidelity = ? AND source = ? "
+            "ORDER BY cached LIMIT 1",
             (problem, _key_text(design_key), float(speed_kmh), fidelity, source),
         ).fetchone()
         if row is None:
             return None
-        return Outcome(bool(row[0]), None if row[1] is None else float(row[1]), str(row[2]), float(row[3]))
+        sigma = None if row[1] is None else float(row[1])
+        return Outcome(bool(row[0]), sigma, str(row[2]), float(row[3]), _values(row[4]), _values(row[5]))
 
     def lookup_env(
         self, problem: str, design_key: tuple[int, ...], speed_kmh: float, fidelity: str, env: str
@@ -406,6 +430,29 @@ class RunStore:
             return int(self._connection.execute("SELECT count(*) FROM evaluations").fetchone()[0])
         query = "SELECT count(*) FROM evaluations WHERE run_id = ?"
         return int(self._connection.execute(query, (run_id,)).fetchone()[0])
+
+    def _added(self, prefix: str = "") -> str:
+        """The columns schema version 2 added, in a query (NULL in a version-1 store read as it is)."""
+        return ", ".join(f"{prefix}{c}" if self.schema_version >= 2 else f"NULL AS {c}" for c in _ADDED_IN_2)
+
+    def all_evaluations(self) -> list[dict[str, object]]:
+        """Every evaluation of the store with its run's optimiser, seed and package version, oldest first:
+        the columns of the evaluations table, ``x``, ``constraints`` and ``statistics`` decoded (the dataset
+        export)."""
+        cursor = self._connection.execute(
+            f"SELECT e.run_id, r.optimizer, r.seed, r.package_version, e.idx, e.problem, e.design_key, "
+            f"e.speed_kmh, e.fidelity, e.source, e.x, e.feasible, e.sigma, e.reason, e.wall_time, e.cached, "
+            f"e.charged, e.reward, e.created_at, {self._added('e.')} "
+            "FROM evaluations AS e JOIN runs AS r ON r.run_id = e.run_id "
+            "ORDER BY e.run_id, e.idx"
+        )
+        names = [column[0] for column in cursor.description]
+        rows = [dict(zip(names, row, strict=True)) for row in cursor.fetchall()]
+        for row in rows:
+            row["x"] = tuple(float(v) for v in json.loads(str(row["x"])))
+            row["constraints"] = _values(row["constraints"])
+            row["statistics"] = _values(row["statistics"])
+        return rows
 
     # -- lifetime ------------------------------------------------------------------------------------------
 
@@ -437,7 +484,8 @@ def _schema_columns() -> dict[str, frozenset[str]]:
 
 def _stored_evaluation(
     idx: int, x: str, feasible: int, sigma: float | None, reason: str, wall_time: float, cached: int,
-    charged: int, speed: float, key: str, reward: float | None,
+    charged: int, speed: float, key: str, reward: float | None, constraints: str | None,
+    statistics: str | None,
 ) -> StoredEvaluation:  # fmt: skip
     """An evaluation row read back; ValueError or TypeError when a field is not what was written."""
     values = json.loads(x)
@@ -446,9 +494,20 @@ def _stored_evaluation(
     record = EvaluationRecord(
         int(idx), tuple(float(v) for v in values), bool(feasible), None if sigma is None else float(sigma),
         str(reason), float(wall_time), bool(cached), bool(charged), float(speed),
+        _values(constraints), _values(statistics),
     )  # fmt: skip
     design_key = tuple(int(k) for k in key.split(",")) if key else ()
     return StoredEvaluation(record, design_key, None if reward is None else float(reward))
+
+
+def _values(text: str | None) -> tuple[float, ...]:
+    """Constraint values or statistics read back (empty where none were stored; NaN as JSON's NaN)."""
+    if text is None:
+        return ()
+    values = json.loads(text)
+    if not isinstance(values, list):
+        raise ValueError(f"{text!r} is not a list of numbers")
+    return tuple(float(v) for v in values)
 
 
 def _check_header(path: Path) -> None:

@@ -75,6 +75,9 @@ class QuadraticProblem:
     shift_per_kmh : ndarray, shape (n,), or None
         How the minimiser moves with the speed, m per km/h from :data:`CENTRE_SPEED_KMH` (None: it does
         not), as a catenary's optimum does: the test bed of speed-conditioned policies.
+    constraint_names : tuple of str
+        The one constraint value of an outcome: ``constraint @ x - limit``, m (feasible when <= 0, up to
+        1e-12 m of rounding).
     """
 
     name: str
@@ -90,6 +93,7 @@ class QuadraticProblem:
     limit: float
     delay: float = 0.0
     shift_per_kmh: NDArray[np.float64] | None = None
+    constraint_names: tuple[str, ...] = ("constraint_excess_m",)
 
     @property
     def simulate(self) -> SimulateFunction:
@@ -140,10 +144,11 @@ def simulate_quadratic(
     if problem.delay > 0.0:
         time.sleep(problem.delay)
     values = np.asarray(x, dtype=np.float64)
+    excess = (float(values @ problem.constraint - problem.limit),)
     if not problem.feasible(values):
         reason = f"synthetic: constraint {problem.constraint.tolist()} @ x > {problem.limit} m"
-        return Outcome(False, None, reason, time.perf_counter() - start)
-    return Outcome(True, float(problem.sigma(values, speed_kmh)), "", time.perf_counter() - start)
+        return Outcome(False, None, reason, time.perf_counter() - start, excess)
+    return Outcome(True, float(problem.sigma(values, speed_kmh)), "", time.perf_counter() - start, excess)
 
 
 def _quadratic(name: str, delay: float, shift_per_kmh: NDArray[np.float64] | None = None) -> QuadraticProblem:

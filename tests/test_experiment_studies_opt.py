@@ -23,7 +23,7 @@ pytest.importorskip("stable_baselines3", reason="PPO comes from stable-baselines
 from catenary_env.problems.design_problem import DesignProblem  # noqa: E402
 from experiments import optimizer_comparison, rl_studies  # noqa: E402
 from experiments.common import read_csv  # noqa: E402
-from experiments.iohprofiler import IOHRun, improvement_lines, read_dat  # noqa: E402
+from experiments.iohprofiler import INFEASIBLE_Y, IOHRun, evaluation_lines, read_dat  # noqa: E402
 from optimizers import synthetic  # noqa: E402
 from optimizers.synthetic import get_synthetic_problem  # noqa: E402
 
@@ -187,11 +187,36 @@ def test_policy_start_is_refused_where_the_bounds_are_not_centred_on_the_referen
         rl_studies.check_starts_at_reference("B2")
 
 
-def test_ioh_lines_are_improvements_and_the_last_evaluation():
+def test_ioh_lines_are_every_evaluation_an_infeasible_one_at_the_penalty():
     run = IOHRun(0, ((1, 40.0, ()), (2, None, ()), (3, 38.0, ()), (4, 39.0, ()), (5, None, ())))
-    # the last evaluation is infeasible: its line carries the best σ so far
-    assert improvement_lines(run) == [(1, 40.0), (3, 38.0), (5, 38.0)]
-    assert improvement_lines(IOHRun(0, ((1, None, ()),))) == []
+    assert evaluation_lines(run) == [(1, 40.0), (2, INFEASIBLE_Y), (3, 38.0), (4, 39.0), (5, INFEASIBLE_Y)]
+    assert evaluation_lines(IOHRun(0, ((1, None, ()),))) == [(1, INFEASIBLE_Y)]
+
+
+def test_iohinspector_loads_every_committed_run_in_full():
+    """IOH's own reader (iohinspector 0.0.8) finds every run of the committed comparison, each with all
+    its simulations from evaluation 1, and its best σ."""
+    iohinspector = pytest.importorskip("iohinspector")
+    import polars as pl
+
+    root = Path(__file__).resolve().parents[1] / "results" / "optimizers"
+    manager = iohinspector.DataManager()
+    for path in sorted((root / "ioh").glob("*/IOHprofiler_f*_*.json")):
+        manager.add_json(str(path))
+    data = manager.load(monotonic=False, include_meta_data=True)
+    runs = data.group_by(["algorithm_name", "function_name", "run_id"]).agg(
+        pl.col("evaluations").min().alias("first"), pl.col("evaluations").max().alias("last"),
+        pl.len().alias("lines"), pl.col("raw_y").min().alias("best"),
+    )  # fmt: skip
+    done = [r for r in read_csv(root / "runs.csv") if r["status"] == "done"]
+    assert runs.height == len(done) == 70
+    assert set(runs["first"]) == {1} and runs["lines"].to_list() == runs["last"].to_list()
+    expected = sorted((r["optimizer"], r["problem"], r["n_simulations"], r["best_sigma_N"]) for r in done)
+    found = sorted(
+        zip(runs["algorithm_name"], runs["function_name"], runs["last"], runs["best"], strict=True)
+    )
+    for (o, p, n, best), (o2, p2, n2, best2) in zip(expected, found, strict=True):
+        assert (o, p, n) == (o2, p2, n2) and best2 == pytest.approx(best, abs=1e-9)
 
 
 def test_ioh_reader_refuses_a_foreign_header(tmp_path):

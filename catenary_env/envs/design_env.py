@@ -6,6 +6,7 @@ from __future__ import annotations
 import functools
 import math
 from collections import OrderedDict
+from collections.abc import Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -18,7 +19,7 @@ from ..calibration_cache import quiet_calibrations
 from ..model.buildability import BuildabilityLimits, buildability_named
 from ..model.definition import CatenaryDefinition
 from ..model.design import Design, check_speed, physical_warnings
-from ..pipeline import Evaluation, Fidelity, en50367_mean_force
+from ..pipeline import CONSTRAINTS, Evaluation, Fidelity, en50367_mean_force
 from ..problems import DesignProblem, get_problem, resolve_fidelity
 from ..problems.speeds import SpeedsEvaluation, evaluate_over_speeds
 from ..problems.tolerance import RobustObjective
@@ -120,8 +121,12 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     `max_support_uplift` in m; absent when the design was not simulated dynamically),
     `acceptance` (the EN 50367 acceptance block, :class:`~catenary_env.analysis.acceptance.Acceptance`:
     each criterion's limit, value, verdict and source tag; docs/acceptance.md) and `acceptance_passed` (bool;
-    both absent where the statistics are), `uplift_force` (N), `dropper_lengths` (m) and `dropper_forces` (N)
-    of a central span,
+    both absent where the statistics are), `uplift_force` (N), `constraints` (the values of
+    `catenary_env.pipeline.CONSTRAINTS` by name: the largest dropper compression in N, the largest
+    dropper-length shortfall in m and the contact-loss share in %; feasible when all are <= 0; a value not
+    computed is absent, e.g. the contact loss of a design that failed the static check; arrays over the speeds
+    with a multi-speed objective, NaN where not computed), `dropper_lengths` (m) and `dropper_forces` (N) of a
+    central span,
     `wall_time` (s, of the simulations behind the result) and `clipped` (bool). With a multi-speed
     objective, `speed_kmh`, the statistics and `uplift_force` are arrays over `speeds_kmh`; a design is
     not simulated at the speeds after the first at which it is infeasible (the statistics are then absent,
@@ -349,6 +354,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             info["acceptance"] = acceptance[0] if single else tuple(acceptance)
             passed = [a.passed for a in acceptance if a is not None]
             info["acceptance_passed"] = passed[0] if single else np.array(passed)
+        info["constraints"] = _constraint_info(evaluations, len(self._speeds))
         info["dropper_lengths"] = tuple(evaluations[0].dropper_lengths)
         info["dropper_forces"] = tuple(evaluations[0].dropper_forces)
         info["wall_time"] = result.wall_time
@@ -481,3 +487,14 @@ def _check_speed(catenary: CatenaryDefinition, speed_kmh: float) -> None:
     check_speed(catenary, speed_kmh / 3.6)
     for warning in physical_warnings(catenary, speed_kmh / 3.6, None):
         gym.logger.warn(warning)
+
+
+def _constraint_info(evaluations: Sequence[Evaluation], n_speeds: int) -> dict[str, Any]:
+    """``info["constraints"]``: each of :data:`~catenary_env.pipeline.CONSTRAINTS` by name (feasible when
+    <= 0), a float at one speed (absent where not computed), else an array over the speeds (NaN where not
+    computed)."""
+    values = [tuple(e.constraints) or (math.nan,) * len(CONSTRAINTS) for e in evaluations]
+    values += [(math.nan,) * len(CONSTRAINTS)] * (n_speeds - len(values))
+    if n_speeds == 1:  # a value not computed is absent, as the statistics of a design not simulated are
+        return {name: float(v) for name, v in zip(CONSTRAINTS, values[0], strict=True) if not math.isnan(v)}
+    return {name: np.array([v[i] for v in values]) for i, name in enumerate(CONSTRAINTS)}

@@ -49,6 +49,7 @@ from ..pipeline import (
     check_section_deviations,
     check_uplift,
 )
+from .best_known import BestKnown, best_known_table
 from .grid import DesignGrid
 from .reference import calibrated_uplift, preset_catenary, preset_pantograph, reference_evaluation
 from .tolerance import RobustObjective, ToleranceEvaluation, evaluate_under_tolerances, robust_evaluation
@@ -289,6 +290,13 @@ class DesignProblem:
             robust=self.robust if robust is None else robust,
         )
 
+    @property
+    def best_known(self) -> BestKnown | None:
+        """The best-known design of this problem (:mod:`~catenary_env.problems.best_known`), or None where
+        none is recorded for this model (its :meth:`store_fingerprint`)."""
+        best = best_known_table().get(self.name)
+        return best if best is not None and best.model_fingerprint == self.store_fingerprint() else None
+
     def store_fingerprint(self) -> str:
         """:meth:`fingerprint` with the named fidelities' settings (mesh, time step, the span-mode model's
         cut-offs): the key of stored study results, which are never served after either changes."""
@@ -359,7 +367,8 @@ class DesignProblem:
             check_design(catenary, design)
             check_section_deviations(catenary, design, resolved, deviations)
         except DesignError as error:
-            return Evaluation(False, f"design: {error}", None, (), (), force, 0.0)
+            unknown = (np.nan,) * len(pipeline.CONSTRAINTS)
+            return Evaluation(False, f"design: {error}", None, (), (), force, 0.0, constraints=unknown)
         pantograph = self.pantograph_definition
         check_uplift(pantograph, force)
         check_fidelity(catenary, resolved)

@@ -31,6 +31,7 @@ from catenary_env.errors import MissingDependency, UsageError
 
 from .. import ga, nevergrad_adapters  # noqa: F401  (register the built-in optimisers)
 from ..base import OPTIMIZERS, OptimizationResult
+from ..plugins import get_optimizer, load_plugins
 
 __all__ = ["DEFAULT_STORE", "DESCRIPTION", "add_arguments", "add_parser", "run"]
 
@@ -50,6 +51,7 @@ DESCRIPTION = (
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the ``optimize`` options to a parser."""
+    load_plugins()
     names = sorted(OPTIMIZERS) + list(RL_OPTIMIZERS)
     parser.add_argument(
         "problem",
@@ -60,9 +62,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--optimizer",
         default="ga",
-        choices=names,
         metavar="NAME",
-        help=f"optimiser, one of: {', '.join(names)} (default: ga, the study's genetic algorithm)",
+        help=f"optimiser, one of: {', '.join(names)}, or one registered later or by an installed package "
+        "(docs/problems.md, 'Your own optimiser'; default: ga, the study's genetic algorithm)",
     )
     parser.add_argument(
         "--budget",
@@ -189,6 +191,8 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--max-evaluations {args.max_evaluations}: must be at least 1 evaluation")
     if not args.progress_every >= 0.0:
         raise UsageError(f"--progress-every {args.progress_every}: must be a number of seconds >= 0")
+    if args.optimizer not in RL_OPTIMIZERS:
+        get_optimizer(args.optimizer)  # one line naming those available, before anything is opened
     if args.save_policy is not None:
         if args.optimizer not in RL_OPTIMIZERS:
             raise UsageError(f"--save-policy is for --optimizer ppo or sac, not {args.optimizer}")
