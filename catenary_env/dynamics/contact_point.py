@@ -78,15 +78,14 @@ def start_contact_point(
     nm: NewmarkConstants,
     speed: float,
     n_steps: int | None,
-    run_on: float = 0.0,
 ) -> StartedPoint:
     """The pantograph's positions (at ``speed`` m/s, ``n_steps`` steps at most), contact-wire elements and
     heights, matrices, and its static contact on the wire where it enters the section.
 
-    The train's first pantograph starts at the section's start and runs ``run_on`` m past its end; this one
-    follows it ``point.offset`` m behind (docs/model.md, 'Several pantographs'). Off the section (not yet
-    on it, or past its end) it touches nothing: its element is -1 there, and it waits in its static
-    contact on the wire at the section's start, which it meets in that state.
+    The train's first pantograph runs from the section's start to its end; this one follows it
+    ``point.offset`` m behind (docs/model.md, 'Several pantographs'). Before it reaches the section it
+    touches nothing (its element is -1 there): it waits in its static contact on the wire at the section's
+    start, which it meets in that state.
     """
     lay = system.static.layout
     cat = lay.catenary
@@ -96,7 +95,7 @@ def start_contact_point(
     load = np.zeros(pm.mass.shape[0])
     load[0] = point.frame_force
     length = lay.n_spans * lay.span_length
-    time, position = passage_positions(length + run_on, speed, nm.dt)
+    time, position = passage_positions(length, speed, nm.dt)
     if n_steps is not None:
         time, position = time[:n_steps], position[:n_steps]
     if point.offset:
@@ -134,11 +133,9 @@ def start_contact_point(
 
 
 def start_train(system: LinearSystem, passage: Passage, nm: NewmarkConstants) -> tuple[StartedPoint, ...]:
-    """Every pantograph of the passage (:func:`start_contact_point`): the first runs on past the section's
-    end until the last has reached it."""
-    run_on = passage.contact_points[-1].offset
+    """Every pantograph of the passage (:func:`start_contact_point`)."""
     return tuple(
-        start_contact_point(system, point, nm, passage.speed, passage.n_steps, run_on)
+        start_contact_point(system, point, nm, passage.speed, passage.n_steps)
         for point in passage.contact_points
     )
 

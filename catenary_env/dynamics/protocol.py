@@ -35,9 +35,9 @@ class ContactPoint:
         The static force on its frame, N (:func:`~catenary_env.dynamics.pantograph.frame_force` of the
         uplift force).
     offset : float
-        Its distance behind the train's first pantograph, m (0 for the first). The first pantograph starts at
-        the section's start and the passage goes on until the last one has reached the section's end
-        (docs/model.md, 'Several pantographs').
+        Its distance behind the train's first pantograph, m (0 for the first). The first pantograph runs
+        from the section's start to its end, the others enter the section behind it (docs/model.md,
+        'Several pantographs').
     """
 
     pantograph: PantographDefinition
