@@ -3,7 +3,7 @@
 EN 50318:2002 gives no accepted ranges for a trailing pantograph, so the physics is checked instead: a
 second pantograph that never reaches the section leaves the first one's passage as it was alone; behind a
 leader whose wake has died out the trailing pantograph sees what a lone one sees; at a crawl both heads are
-in static balance, with the pantograph's springs and with the catenary's static compliance under both forces; with
+in static balance, with the pantograph's springs and with the catenary's static compliance under both; with
 every mode kept the span-mode model is the exact one, and the compiled loops are the numpy ones.
 """
 
@@ -104,7 +104,7 @@ def test_at_a_crawl_both_heads_are_in_static_balance(damped, benchmark_pantograp
     run = exact.run(prepared, Passage(speed, train(pantograph, spacing), n_steps=steps))
     k0, series = pantograph.stiffnesses[0], sum(1.0 / k for k in pantograph.stiffnesses[1:])
     traces = run.pantographs
-    # The pantograph: every spring of the chain carries the contact force f, y_head = (F - f) / k0 - f Σ 1/k_i,
+    # The pantograph: every spring of the chain carries the contact force f, y_h = (F - f) / k0 - f Σ 1/k_i,
     # on average over each one's last span (the head rings a little where the wire's height bends at a
     # dropper, and its dampers' mean force is nil over a span, the wire's height the same at both ends).
     last = slice(-int(span / (speed * DT)), None)
