@@ -30,6 +30,7 @@ from .fem.layout import build_layout
 from .model.definition import CatenaryDefinition, PantographDefinition
 from .model.design import Design, DesignError, check_design, check_speed
 from .statics.shape_finding import ShapeFindingError, StaticSolution, find_shape
+from .train import SINGLE, Train, objective_sigma
 
 NEAR_CUTOFF = math.inf
 """Hz: modes kept near the pantograph: every one (the convergence study, docs/performance.md: a dropper
@@ -120,6 +121,10 @@ class Evaluation:
     trace_position, trace_force : tuple of float
         The filtered contact force (N) along the analysis section (m), at most
         :data:`TRACE_POINTS` samples, for pictures; empty when no passage was simulated.
+    pantograph_statistics : tuple of ContactStatistics
+        Every pantograph's statistics, the leading one first (its ``statistics``); empty when unsimulated.
+    objective_sigma : float or None
+        The train's objective σ, N, where the train has several pantographs (:attr:`sigma` reads it).
     """
 
     feasible: bool
@@ -131,6 +136,16 @@ class Evaluation:
     wall_time: float
     trace_position: tuple[float, ...] = ()
     trace_force: tuple[float, ...] = ()
+    pantograph_statistics: tuple[ContactStatistics, ...] = ()
+    objective_sigma: float | None = None
+
+    @property
+    def sigma(self) -> float | None:
+        """The objective σ, N: the train's objective pantograph(s)' (:class:`~catenary_env.train.Train`), the
+        leading one's by default; None when unsimulated."""
+        if self.objective_sigma is not None:
+            return self.objective_sigma
+        return None if self.statistics is None else self.statistics.std
 
 
 TRACE_POINTS = 1000
@@ -152,6 +167,10 @@ class Simulation:
         N.
     filtered_force : ndarray, shape (n_steps,)
         The 20 Hz low-pass filtered contact force at every step, N (filtered once, here).
+    pantograph_statistics : tuple of ContactStatistics
+        Every pantograph's statistics, the leading one first (``statistics``).
+    filtered_forces : tuple of ndarray
+        Every pantograph's filtered contact force, the leading one first (``filtered_force``).
     """
 
     static: StaticSolution
@@ -161,6 +180,8 @@ class Simulation:
     window: tuple[float, float]
     uplift_force: float
     filtered_force: NDArray[np.float64]
+    pantograph_statistics: tuple[ContactStatistics, ...] = ()
+    filtered_forces: tuple[NDArray[np.float64], ...] = ()
 
 
 def analysis_window(catenary: CatenaryDefinition, fidelity: Fidelity) -> tuple[float, float]:
@@ -244,6 +265,7 @@ def run_passage(
     progress: Callable[[float], None] | None = None,
     prepared: PreparedExact | PreparedSpanModes | None = None,
     statistics_only: bool = False,
+    train: Train = SINGLE,
 ) -> Simulation:
     """The pantograph's dynamic passage at ``speed`` (m/s) over a solved static state (the design must be
     statically feasible), on the fidelity's dynamic model
@@ -255,7 +277,8 @@ def run_passage(
     over that span), and the trajectory ends there. The force on the pantograph's frame follows the
     catenary's ``modelling.uplift_definition``; a system that is not Rayleigh-damped
     (:attr:`LinearSystem.rayleigh`) runs the exact model's straightforward loop (its oracle), minutes rather
-    than seconds.
+    than seconds. ``train`` adds pantographs behind this one (docs/model.md, 'Several pantographs'); the
+    statistics are then taken for each.
     """
     catenary = static.layout.catenary
     system = linearise(static) if system is None else system
@@ -263,18 +286,28 @@ def run_passage(
         check_fidelity(catenary, fidelity)  # the span-mode model refuses it
     model = DYNAMIC_MODELS[fidelity.dynamics]
     prepared = model.prepare(system, fidelity) if prepared is None else prepared
-    n_steps = _statistics_steps(catenary, fidelity, speed) if statistics_only and model.stops_early else None
-    point = ContactPoint(pantograph, frame_force(system, pantograph, uplift_force))
-    trajectory = model.run(prepared, Passage(speed, (point,), n_steps=n_steps, progress=progress))
     window = analysis_window(catenary, fidelity)
-    filtered = filtered_contact_force(trajectory)
-    stats = passage_statistics(trajectory, window, filtered)
-    return Simulation(static, system, trajectory, stats, window, uplift_force, filtered)
+    train.check(catenary, fidelity.n_spans, window[1])
+    last = train.trailing[-1].offset if train.trailing else 0.0
+    n_steps = (
+        _statistics_steps(catenary, fidelity, speed, last) if statistics_only and model.stops_early else None
+    )
+    points = [ContactPoint(pantograph, frame_force(system, pantograph, uplift_force))]
+    for t in train.trailing:
+        force = uplift_force if t.uplift_force is None else t.uplift_force
+        points.append(ContactPoint(t.pantograph, frame_force(system, t.pantograph, force), t.offset))
+    trajectory = model.run(prepared, Passage(speed, tuple(points), n_steps=n_steps, progress=progress))
+    filtered = tuple(filtered_contact_force(trajectory.of_pantograph(i)) for i in range(len(points)))
+    stats = tuple(passage_statistics(trajectory.of_pantograph(i), window, f) for i, f in enumerate(filtered))
+    return Simulation(
+        static, system, trajectory, stats[0], window, uplift_force, filtered[0], stats, filtered
+    )
 
 
-def _statistics_steps(catenary: CatenaryDefinition, fidelity: Fidelity, speed: float) -> int:
-    """Steps until the pantograph is one span past the analysis section."""
-    end = analysis_window(catenary, fidelity)[1] + catenary.span_length
+def _statistics_steps(catenary: CatenaryDefinition, fidelity: Fidelity, speed: float, offset: float) -> int:
+    """Steps until the last pantograph, ``offset`` m behind the first, is one span past the analysis
+    section."""
+    end = analysis_window(catenary, fidelity)[1] + catenary.span_length + offset
     return int(np.floor(end / (speed * fidelity.time_step))) + 1
 
 
@@ -295,8 +328,10 @@ def simulate(
     fidelity: Fidelity,
     uplift_force: float | None = None,
     progress: Callable[[float], None] | None = None,
+    train: Train = SINGLE,
 ) -> Simulation:
-    """Shape-finding, linearisation and the pantograph passage at ``speed`` (m/s).
+    """Shape-finding, linearisation and the pantograph passage at ``speed`` (m/s), with the ``train``'s
+    pantographs behind this one.
 
     Raises
     ------
@@ -313,7 +348,7 @@ def simulate(
     reason = static.infeasibility()
     if reason:
         raise ValueError(f"design is infeasible: {reason}")
-    return run_passage(static, pantograph, speed, fidelity, force, progress=progress)
+    return run_passage(static, pantograph, speed, fidelity, force, progress=progress, train=train)
 
 
 def evaluate(
@@ -323,8 +358,10 @@ def evaluate(
     speed: float,
     fidelity: Fidelity,
     uplift_force: float | None = None,
+    train: Train = SINGLE,
 ) -> Evaluation:
-    """Simulate one design at one speed (m/s) and return its feasibility and statistics.
+    """Simulate one design at one speed (m/s) and return its feasibility and statistics (of every pantograph
+    of the ``train``; contact lost by any makes it infeasible).
 
     Bad input raises :class:`DesignError` before any solve; an infeasible design (static: compressed
     dropper, negative dropper length, or a shape-finding that does not converge; dynamic: contact
@@ -334,7 +371,8 @@ def evaluate(
     force = check_uplift(pantograph, uplift_force)
     check_design(catenary, design)
     check_fidelity(catenary, fidelity)
-    return evaluate_unchecked(catenary, pantograph, design, speed, fidelity, force)
+    train.check(catenary, fidelity.n_spans, analysis_window(catenary, fidelity)[1])
+    return evaluate_unchecked(catenary, pantograph, design, speed, fidelity, force, train)
 
 
 @single_threaded
@@ -345,6 +383,7 @@ def evaluate_unchecked(
     speed: float,
     fidelity: Fidelity,
     uplift_force: float,
+    train: Train = SINGLE,
 ) -> Evaluation:
     """:func:`evaluate` without its input checks, for a caller that has made them (a design problem).
 
@@ -362,16 +401,21 @@ def evaluate_unchecked(
     reason = static.infeasibility()
     if reason:
         return Evaluation(False, reason, None, lengths, forces, force, time.perf_counter() - start)
-    sim = run_passage(static, pantograph, speed, fidelity, force, statistics_only=True)
-    stats = sim.statistics
-    if stats.contact_loss_percent > 0.0:
-        reason = (
-            f"dynamic: contact lost {stats.contact_loss_percent:.3f} % of the time in the analysis section"
-        )
+    sim = run_passage(static, pantograph, speed, fidelity, force, statistics_only=True, train=train)
+    for i, stats in enumerate(sim.pantograph_statistics):
+        if stats.contact_loss_percent > 0.0 and not reason:
+            which = f"pantograph {i + 1}: " if train.trailing else ""
+            reason = (
+                f"dynamic: {which}contact lost {stats.contact_loss_percent:.3f} % of the time in the "
+                "analysis section"
+            )
     position, filtered = _trace(sim)
+    blocks = sim.pantograph_statistics
+    objective = objective_sigma(blocks, train.objective) if train.trailing else None
     return Evaluation(
-        not reason, reason, stats, lengths, forces, force, time.perf_counter() - start, position, filtered
-    )
+        not reason, reason, sim.statistics, lengths, forces, force, time.perf_counter() - start, position,
+        filtered, blocks, objective,
+    )  # fmt: skip
 
 
 def _trace(sim: Simulation) -> tuple[tuple[float, ...], tuple[float, ...]]:

@@ -13,7 +13,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from catenary_env.fingerprint import model_fingerprint
 from catenary_env.problems import evaluate_problem, get_problem
+from catenary_env.train import SINGLE, Train
 
 from .problem import Outcome, SimulateFunction
 
@@ -21,7 +23,7 @@ __all__ = ["CatenaryProblem", "catenary_problem", "simulate_catenary_design"]
 
 
 def simulate_catenary_design(
-    problem_name: str, x: tuple[float, ...], speed_kmh: float, fidelity: str
+    problem_name: str, x: tuple[float, ...], speed_kmh: float, fidelity: str, train: Train = SINGLE
 ) -> Outcome:
     """Simulate a design of a registered catenary design problem: picklable, for worker processes.
 
@@ -35,10 +37,11 @@ def simulate_catenary_design(
         Train speed, km/h.
     fidelity : str
         ``"study"`` or ``"test"``.
+    train : Train
+        Pantographs behind the leading one and the objective's: σ is :attr:`Evaluation.sigma`.
     """
-    evaluation = evaluate_problem(problem_name, tuple(x), float(speed_kmh), fidelity)
-    statistics = evaluation.statistics
-    sigma = None if statistics is None else float(statistics.std)
+    evaluation = evaluate_problem(problem_name, tuple(x), float(speed_kmh), fidelity, train=train)
+    sigma = None if evaluation.sigma is None else float(evaluation.sigma)
     return Outcome(bool(evaluation.feasible), sigma, str(evaluation.reason), float(evaluation.wall_time))
 
 
@@ -53,14 +56,18 @@ class CatenaryProblem:
     upper: NDArray[np.float64]
     step: NDArray[np.float64]
     model_fingerprint: str = ""
+    train: Train = SINGLE
 
     @property
     def simulate(self) -> SimulateFunction:
-        return functools.partial(simulate_catenary_design, self.name)
+        if self.train == SINGLE:
+            return functools.partial(simulate_catenary_design, self.name)
+        return functools.partial(simulate_catenary_design, self.name, train=self.train)
 
 
-def catenary_problem(name: str) -> CatenaryProblem:
-    """Adapt the design problem ``name`` of ``catenary_env.problems`` (e.g. ``"B1"``).
+def catenary_problem(name: str, train: Train = SINGLE) -> CatenaryProblem:
+    """Adapt the design problem ``name`` of ``catenary_env.problems`` (e.g. ``"B1"``), with the ``train``'s
+    pantographs behind the leading one (its objective's σ; the stored results' key includes it).
 
     Raises
     ------
@@ -77,5 +84,8 @@ def catenary_problem(name: str) -> CatenaryProblem:
         np.array(problem.lower, dtype=np.float64),
         np.array(problem.upper, dtype=np.float64),
         np.array(problem.step, dtype=np.float64),
-        problem.store_fingerprint(),
+        problem.store_fingerprint()
+        if train == SINGLE
+        else model_fingerprint(problem.store_fingerprint(), train),
+        train,
     )

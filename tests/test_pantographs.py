@@ -154,3 +154,101 @@ def test_the_compiled_loops_equal_the_numpy_ones_with_two_pantographs(
         # the trailing pantograph meets the moving wire with some 800 N: 1e-9 N at the leader's scale
         assert np.abs(pa.contact_force - pb.contact_force).max() < 1e-8
         assert np.abs(pa.wire_uplift - pb.wire_uplift).max() < 1e-10
+
+
+# -- the train in the pipeline, the problems, the envs and the command line ---------------------------------
+
+
+def _fidelity(n_spans: int = 8):
+    from catenary_env.problems import resolve_fidelity
+
+    return resolve_fidelity("test", n_spans)
+
+
+def test_an_evaluation_carries_every_pantographs_statistics_and_its_objective(
+    benchmark_catenary, benchmark_pantograph_definition
+):
+    from catenary_env.pipeline import evaluate
+    from catenary_env.train import OBJECTIVES, Train
+
+    design = level_design(benchmark_catenary)
+    p = benchmark_pantograph_definition
+    alone = evaluate(benchmark_catenary, p, design, SPEED, _fidelity(), 160.0)
+    assert alone.sigma == alone.statistics.std and alone.pantograph_statistics == (alone.statistics,)
+    sigmas = {}
+    for objective in OBJECTIVES:
+        two = evaluate(
+            benchmark_catenary, p, design, SPEED, _fidelity(), 160.0, Train.behind([p], 110.0, objective)
+        )
+        leading, trailing = two.pantograph_statistics
+        assert two.statistics == leading
+        assert two.feasible == (leading.contact_loss_percent == trailing.contact_loss_percent == 0.0)
+        sigmas[objective] = two.sigma
+    assert leading.std != trailing.std
+    assert sigmas == {
+        "leading": leading.std,
+        "trailing": trailing.std,
+        "worst": max(leading.std, trailing.std),
+        "mean": (leading.std + trailing.std) / 2,
+    }
+
+
+def test_a_spacing_the_section_cannot_take_is_refused_naming_the_range(
+    benchmark_catenary, benchmark_pantograph_definition
+):
+    from catenary_env.model.design import DesignError
+    from catenary_env.pipeline import evaluate
+    from catenary_env.train import Train
+
+    p = benchmark_pantograph_definition
+    design = level_design(benchmark_catenary)
+    for spacing in (20.0, 300.0):  # less than a span; the leading pantograph would leave 8 spans too soon
+        with pytest.raises(DesignError, match="55 m apart at least and 165 m at most"):
+            evaluate(benchmark_catenary, p, design, SPEED, _fidelity(), 160.0, Train.behind([p], spacing))
+    with pytest.raises(DesignError, match="train.objective = 'best'"):
+        Train.behind([p], 100.0, "best")
+
+
+def test_a_problem_and_its_env_take_a_train(benchmark_pantograph_definition):
+    gym = pytest.importorskip("gymnasium")
+    from catenary_env.envs import register_envs
+    from catenary_env.problems import get_problem
+    from catenary_env.train import Train
+
+    train = Train.behind([benchmark_pantograph_definition], 110.0, "worst")
+    problem = get_problem("B1")
+    evaluation = problem.evaluate(problem.reference_x(), 300.0, _fidelity(), uplift_force=160.0, train=train)
+    assert len(evaluation.pantograph_statistics) == 2
+    register_envs()
+    env = gym.make("Catenary-B1-v0", fidelity=_fidelity(), train=train)
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(env.unwrapped.x_to_action(problem.reference_x()))
+    blocks = info["pantograph_statistics"]
+    assert len(blocks) == 2 and blocks[0]["std"] == info["std"]
+    if info["feasible"]:
+        assert info["objective"] == pytest.approx(max(b["std"] for b in blocks))
+
+
+def test_simulate_on_the_command_line_prints_each_pantograph(capsys):
+    from catenary_env.cli import main
+
+    argv = [
+        "simulate",
+        "benchmark",
+        "--speed",
+        "300",
+        "--uplift",
+        "160",
+        "--fidelity",
+        "test",
+        "--spans",
+        "8",
+    ]
+    assert main([*argv, "--pantographs", "benchmark,benchmark", "--spacing", "110", "--json"]) == 0
+    import json
+
+    result = json.loads(capsys.readouterr().out)
+    assert [p["offset"] for p in result["pantographs"]] == [0.0, 110.0]
+    assert result["statistics"] == result["pantographs"][0]["statistics"]
+    assert main([*argv, "--pantographs", "benchmark,benchmark", "--spacing", "400"]) == 2
+    assert "at most" in capsys.readouterr().err

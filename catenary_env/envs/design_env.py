@@ -17,9 +17,10 @@ from ..analysis.statistics import ContactStatistics
 from ..calibration_cache import quiet_calibrations
 from ..model.definition import CatenaryDefinition
 from ..model.design import Design, check_speed, physical_warnings
-from ..pipeline import Evaluation, Fidelity, en50367_mean_force
+from ..pipeline import Evaluation, Fidelity, analysis_window, en50367_mean_force
 from ..problems import DesignProblem, get_problem, resolve_fidelity
 from ..problems.speeds import SpeedsEvaluation, evaluate_over_speeds
+from ..train import SINGLE, Train
 from .vector_options import VECTOR_KWARGS
 
 OBJECTIVES = ("sigma", "mean_sigma_over_speeds", "worst_sigma_over_speeds")
@@ -111,9 +112,11 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     `std`, `std_over_mean`,
     `statistical_max`, `statistical_min`, `actual_max`, `actual_min` in N, `contact_loss_percent` in %,
     `max_support_uplift` in m; absent when the design was not simulated dynamically),
-    `uplift_force` (N), `dropper_lengths` (m) and `dropper_forces` (N) of a central span,
-    `wall_time` (s, of the simulations behind the result) and `clipped` (bool). With a multi-speed
-    objective, `speed_kmh`, the statistics and `uplift_force` are arrays over `speeds_kmh`; a design is
+    `uplift_force` (N), `pantograph_statistics` (a dict of those statistics per pantograph, the
+    leading one first; per speed with a multi-speed objective), `dropper_lengths` (m) and
+    `dropper_forces` (N) of a central span, `wall_time` (s, of the simulations behind the result) and
+    `clipped` (bool). With a multi-speed objective, `speed_kmh`, the statistics and `uplift_force` are
+    arrays over `speeds_kmh`; a design is
     not simulated at the speeds after the first at which it is infeasible (the statistics are then absent,
     `uplift_force` NaN there), as in the studies' mean-σ problem (`catenary_env.problems.speeds`).
     A design an env has already simulated (the last 1024, on the grid, at the same speed) is not
@@ -137,6 +140,9 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
       the first step) with its statistics.
     - `vector_kwargs`: registered for `gymnasium.make_vec` (same-step autoreset), which reads it;
       `gymnasium.make` passes it on, and the env refuses any other value.
+    - `train=SINGLE`: a :class:`~catenary_env.train.Train`, pantographs behind the leading one and which
+      of them the objective's σ is (`"leading"`, `"trailing"`, `"worst"`, `"mean"`); feasibility covers
+      every pantograph (docs/model.md, 'Several pantographs'). Default: one pantograph.
 
     ```python
     >>> import gymnasium as gym
@@ -167,6 +173,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         normalize_reward: bool = False,
         render_mode: str | None = None,
         vector_kwargs: dict[str, Any] | None = None,
+        train: Train = SINGLE,
     ) -> None:
         if vector_kwargs is not None and vector_kwargs != VECTOR_KWARGS:
             raise ValueError(
@@ -175,6 +182,11 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             )
         self.problem: DesignProblem = get_problem(problem)
         self.fidelity: Fidelity = resolve_fidelity(fidelity, n_spans)
+        if not isinstance(train, Train):
+            raise ValueError(f"train = {train!r}: a catenary_env.train.Train")
+        catenary = self.problem.catenary_definition
+        train.check(catenary, self.fidelity.n_spans, analysis_window(catenary, self.fidelity)[1])
+        self.train = train
         self.objective = objective
         self.normalize_reward = bool(normalize_reward)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -263,7 +275,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         if key in self._memo:
             self._memo.move_to_end(key)
             return self._memo[key]
-        evaluation = self.problem.evaluate(x, speed, self.fidelity)
+        evaluation = self.problem.evaluate(x, speed, self.fidelity, train=self.train)
         self.evaluation_count += 1
         self._memo[key] = evaluation
         if len(self._memo) > MEMO_SIZE:
@@ -280,7 +292,8 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     def _reference_objective(self) -> float:
         reference = evaluate_over_speeds(
-            functools.partial(self.problem.reference_evaluation, fidelity=self.fidelity), self._speeds
+            functools.partial(self.problem.reference_evaluation, fidelity=self.fidelity, train=self.train),
+            self._speeds,
         )
         sigma = reference.sigma(self.objective == "worst_sigma_over_speeds")
         if sigma is None:
@@ -317,6 +330,8 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         info["uplift_force"] = (
             uplift[0] if single else np.array(uplift + [math.nan] * (len(self._speeds) - len(uplift)))
         )
+        per_pantograph = [tuple(s.as_dict() for s in e.pantograph_statistics) for e in evaluations]
+        info["pantograph_statistics"] = per_pantograph[0] if single else tuple(per_pantograph)
         info["dropper_lengths"] = tuple(evaluations[0].dropper_lengths)
         info["dropper_forces"] = tuple(evaluations[0].dropper_forces)
         info["wall_time"] = result.wall_time

@@ -39,6 +39,7 @@ from ..fingerprint import model_fingerprint
 from ..model.definition import CatenaryDefinition, PantographDefinition
 from ..model.design import Design, DesignError, check_design, check_speed, presag_design, symmetric_design
 from ..pipeline import FIDELITIES, Evaluation, Fidelity, check_fidelity, check_uplift
+from ..train import SINGLE, Train
 from .grid import DesignGrid
 from .reference import calibrated_uplift, preset_catenary, preset_pantograph, reference_evaluation
 
@@ -261,11 +262,12 @@ class DesignProblem:
         return model_fingerprint(self.fingerprint(), fidelities)
 
     def reference_evaluation(
-        self, speed_kmh: float = 300.0, fidelity: str | Fidelity = "study"
+        self, speed_kmh: float = 300.0, fidelity: str | Fidelity = "study", train: Train = SINGLE
     ) -> Evaluation:
-        """The reference design's evaluation at a speed (cached in this process)."""
+        """The reference design's evaluation at a speed (cached in this process), with the ``train``'s
+        pantographs behind the leading one."""
         return reference_evaluation(
-            self.catenary, self.reference_design(), float(speed_kmh), resolve_fidelity(fidelity)
+            self.catenary, self.reference_design(), float(speed_kmh), resolve_fidelity(fidelity), train
         )
 
     def evaluate(
@@ -274,6 +276,7 @@ class DesignProblem:
         speed_kmh: float = 300.0,
         fidelity: str | Fidelity = "study",
         uplift_force: float | None = None,
+        train: Train = SINGLE,
     ) -> Evaluation:
         """Simulate the design of ``x`` at a speed.
 
@@ -288,6 +291,10 @@ class DesignProblem:
         uplift_force : float, optional
             Pantograph uplift force, N. Default: the problem's, :meth:`uplift_force` (pass it to spare
             worker processes their own calibration).
+        train : Train
+            Pantographs behind the leading one (with the leading one's uplift force unless they set their
+            own) and the objective's pantograph(s), :attr:`Evaluation.sigma` (docs/model.md, 'Several
+            pantographs'); default one pantograph.
 
         Returns
         -------
@@ -315,7 +322,8 @@ class DesignProblem:
         pantograph = self.pantograph_definition
         check_uplift(pantograph, force)
         check_fidelity(catenary, resolved)
-        return pipeline.evaluate_unchecked(catenary, pantograph, design, speed, resolved, force)
+        train.check(catenary, resolved.n_spans, pipeline.analysis_window(catenary, resolved)[1])
+        return pipeline.evaluate_unchecked(catenary, pantograph, design, speed, resolved, force, train)
 
     # -- helpers ----------------------------------------------------------------------------------------
 
