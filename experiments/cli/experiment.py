@@ -34,6 +34,10 @@ STUDIES = {
         "optimizer_comparison", "seven optimisers on B1 and SW1 at equal budgets, with IOHprofiler output"
     ),
     "rl": Study("rl_studies", "PPO learning curves, a speed-conditioned policy, a design for 200-320 km/h"),
+    "pantographs": Study(
+        "pantographs",
+        "two pantographs 200 m apart: the design studies' optima, a GA for the worse pantograph",
+    ),
 }
 
 
