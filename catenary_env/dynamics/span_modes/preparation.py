@@ -135,10 +135,6 @@ class PreparedSpanModes:
     def arrays_for(self, configurations: tuple[tuple[int, ...], ...]) -> SpanModeArrays:
         """The design's arrays with these configurations, each the spans the pantographs are in (-1: off
         the section); a configuration is built on its first use and kept."""
-        if all(len(one) == 1 and one[0] == c for c, one in enumerate(configurations)) and len(
-            configurations
-        ) == len(self.arrays.kept):
-            return self.arrays
         for one in configurations:
             if one not in self.built:
                 self.built[one] = self.builder.build(one)
@@ -309,7 +305,11 @@ class _Residuals:
 def kept_modes(reduced: ReducedSystem, near_spans: int, configuration: tuple[int, ...]) -> np.ndarray:
     """(S,): the modes each span keeps in a configuration, the spans the pantographs are in (-1: a
     pantograph off the section): those within ``near_spans`` of a pantograph keep their near modes, the
-    others their far modes (docs/model.md, 'Several pantographs')."""
+    others their far modes (docs/model.md, 'Several pantographs'). The configurations' arrays
+    (:class:`_ConfigurationBuilder`) follow whatever this returns, as long as each count is one the span's
+    blocks and residual compliances are prepared for (its near or far count: another, such as none for the
+    spans far from every pantograph, needs its blocks in ``_ConfigurationBuilder.__init__`` and
+    :class:`_Residuals`)."""
     n_spans = reduced.span_type.size
     far = np.array([t.far_modes for t in reduced.types])[reduced.span_type]
     full = np.array([t.n_modes for t in reduced.types])[reduced.span_type]
