@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from catenary_env.pipeline import Evaluation, Fidelity, analysis_window
+from catenary_env.pipeline import Evaluation, Fidelity, analysis_window, evaluate
 from catenary_env.problems import get_problem, resolve_fidelity
 from catenary_env.train import Train
 from optimizers.catenary_adapter import catenary_problem
@@ -113,10 +113,12 @@ def evaluate_design(
 ) -> Evaluation:
     """A design of the problem (``x`` None: its reference design) at a speed, with the trailing pantograph
     and the problem's uplift force (picklable, for the workers)."""
-    p = get_problem(problem)
-    if x is None:
-        return p.reference_evaluation(speed_kmh, fidelity, train_of(problem))
-    return p.evaluate(x, speed_kmh, fidelity, train=train_of(problem))
+    p, train = get_problem(problem), train_of(problem)
+    force = p.uplift_force(speed_kmh, fidelity)
+    if x is None:  # B3 and SW3 cannot express it in their variables
+        catenary, pantograph = p.catenary_definition, p.pantograph_definition
+        return evaluate(catenary, pantograph, p.reference_design(), speed_kmh / 3.6, fidelity, force, train)
+    return p.evaluate(x, speed_kmh, fidelity, uplift_force=force, train=train)
 
 
 def single_optimum(designs: Path, problem: str) -> tuple[float, ...] | None:
