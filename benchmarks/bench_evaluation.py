@@ -16,6 +16,7 @@ modes, most of them the far field's, so its passage also grows faster than the s
     python benchmarks/bench_evaluation.py --runs 3 --spans 20 --json
     python benchmarks/bench_evaluation.py --backend numpy --numpy-runs 0
     python benchmarks/bench_evaluation.py --runs 1 --spans 20 --batch 8   # + a generation's throughput
+    python benchmarks/bench_evaluation.py --pantographs 2 --runs 5    # two pantographs 200 m apart vs one
 
 Run it on an otherwise idle core (OPENBLAS_NUM_THREADS=1 is set here): timings on shared
 machines are noisy, so quote medians and ratios. The first compiled passage in a process loads
@@ -53,6 +54,7 @@ from catenary_env.model.design import level_design, presag_design  # noqa: E402
 from catenary_env.model.presets import load_catenary, load_pantograph  # noqa: E402
 from catenary_env.pipeline import Fidelity, analysis_window, evaluate  # noqa: E402
 from catenary_env.statics.shape_finding import find_shape  # noqa: E402
+from catenary_env.train import SINGLE, Train  # noqa: E402
 
 PHASES = ("shape_finding", "linearisation", "preparation", "passage", "statistics")
 MODELS = ("span-modes", "exact")
@@ -126,6 +128,35 @@ def study_evaluation(preset: str, n_spans: int, speed_kmh: float, uplift: float,
     evaluation = evaluate(catenary, pantograph, level_design(catenary), speed_kmh / 3.6, fidelity, uplift)
     phases.lap("total")
     return dict(phases.times, sigma=evaluation.statistics.std)
+
+
+def train_comparison(args: argparse.Namespace) -> dict[str, float]:
+    """A study evaluation (:func:`study_evaluation`'s, the span-mode model) with ``--pantographs``
+    pantographs ``--spacing`` m apart against one pantograph, alternately: medians, s, and their ratio."""
+    catenary = load_catenary(args.preset)
+    pantograph = load_pantograph(catenary.pantograph)
+    train = Train.behind([pantograph] * (args.pantographs - 1), args.spacing)
+    fidelity = dataclasses.replace(
+        Fidelity(), n_spans=args.main_spans, analysis_spans=max(1, args.main_spans // 2)
+    )
+    design, speed = level_design(catenary), args.speed / 3.6
+    times: dict[str, list[float]] = {"one": [], "train": []}
+    for run in range(args.runs + 1):  # the first of each warms numba's cache up, untimed
+        for key, which in (("one", SINGLE), ("train", train)):
+            t = time.perf_counter()
+            evaluation = evaluate(catenary, pantograph, design, speed, fidelity, args.uplift, train=which)
+            if run:
+                times[key].append(time.perf_counter() - t)
+    one, two = statistics.median(times["one"]), statistics.median(times["train"])
+    sigmas = [s.std for s in evaluation.pantograph_statistics]
+    if not args.json:
+        print(
+            f"span-modes {args.main_spans} spans: one pantograph {one:.2f} s, {args.pantographs} pantographs "
+            f"{args.spacing:g} m apart {two:.2f} s (medians of {args.runs}): ratio {two / one:.2f}; "
+            "σ " + ", ".join(f"{s:.2f}" for s in sigmas) + " N",
+            flush=True,
+        )
+    return {"one_s": one, "train_s": two, "ratio": two / one, "sigmas_n": sigmas}
 
 
 def backend_comparison(
@@ -334,8 +365,20 @@ def main() -> int:
         default=[],
         help="section lengths on which the exact model runs too (default: the main section only)",
     )
+    parser.add_argument(
+        "--pantographs",
+        type=int,
+        default=1,
+        help="with 2 or more: time a study evaluation of that many pantographs against one, alone",
+    )
+    parser.add_argument("--spacing", type=float, default=200.0, help="pantograph spacing, m (default 200)")
     parser.add_argument("--json", action="store_true", help="print one JSON summary")
     args = parser.parse_args()
+    if args.pantographs > 1:
+        comparison = train_comparison(args)
+        if args.json:
+            print(json.dumps(comparison))
+        return 0
     study = Fidelity()  # the study mesh: 0.5 m / 1.0 m elements, 1 ms, the span-mode model
     fidelities = {"span-modes": study, "exact": dataclasses.replace(study, dynamics="exact")}
     fidelity = fidelities["exact"]

@@ -8,6 +8,10 @@ docs/performance.md, 'Model fidelities'. Cases:
 - installation-tolerance draws (docs/acceptance.md, 'Installation tolerances'): the level wire of B1 and SW1
   and their recorded optima, built with random deviations of every dropper's height and position, so that
   every span differs and each is its own span type of the span-mode model (:data:`TOLERANCE_CASES`).
+- two pantographs :data:`TRAIN_SPACING` m apart (docs/model.md, 'Several pantographs'): the reference
+  design of each of the 8 problems and 20 random designs of each of :data:`TRAIN_PROBLEMS` at 300 km/h,
+  the trailing pantograph with the leading one's uplift force; each pantograph is a row of the table, held
+  to the same tolerances (and the rank correlation over each problem's random designs, per pantograph).
 
 Both models run each case with the same uplift force (the problem's, calibrated on the study model).
 The contract holds when, in every case, σ is within 1 % of the reference, the mean within 0.5 %, the
@@ -24,6 +28,7 @@ fingerprint; a test fails when it is not the current one, naming :data:`REFRESH`
     python benchmarks/fidelity_contract.py --json     # one JSON object with the figures and "passed"
     python benchmarks/fidelity_contract.py --workers 2
     python benchmarks/fidelity_contract.py --only tolerance   # the cases whose name contains "tolerance"
+    python benchmarks/fidelity_contract.py --workers 2 --trains-only   # the two-pantograph cases alone
 """
 
 from __future__ import annotations
@@ -48,6 +53,7 @@ from catenary_env.model.presets import load_catenary, load_pantograph  # noqa: E
 from catenary_env.model.tolerances import PRACTICE, Tolerances, draw_deviations  # noqa: E402
 from catenary_env.pipeline import FIDELITIES, Fidelity, evaluate, solve_static  # noqa: E402
 from catenary_env.problems import PROBLEMS  # noqa: E402
+from catenary_env.train import SINGLE, Train  # noqa: E402
 
 REFERENCE_FILE = Path(__file__).parent / "results" / "fidelity_reference.json"
 CONTRACT_FILE = Path(__file__).parent / "results" / "fidelity_contract.json"
@@ -73,6 +79,11 @@ TOLERANCE_CASES = (
 dropper-position error; the optima are the design studies' recorded ones (results/design)."""
 OPTIMA = {"B1": (-0.012, -0.01, -0.016, -0.02, -0.018), "SW1": (-0.01, -0.005, -0.019, -0.01)}
 """The design studies' recorded optima of B1 and SW1 (results/design/<problem>/summary.json), m."""
+TRAIN_SPACING = 200.0
+"""m between the two pantographs of the two-pantograph cases."""
+TRAIN_PROBLEMS = ("B1", "SW1")
+TRAIN_SPEED_KMH = 300.0
+PANTOGRAPH_ROWS = ("leading", "trailing")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -87,6 +98,7 @@ class Case:
     random: bool
     tolerance_mm: float = 0.0
     draw: int = -1
+    spacing: float = 0.0  # m to a trailing pantograph; 0: one pantograph
 
 
 def _random_designs(problem_name: str, count: int, seed: int) -> list[tuple[float, ...]]:
@@ -136,6 +148,27 @@ def contract_cases() -> list[Case]:
         for k in draws:
             label = f"{name} {design} tolerance {mm:g}mm {k:02d}"
             cases.append(Case(label, name, x, 300.0, force, False, mm, k))
+    return cases + train_cases(uplift)
+
+
+def train_cases(uplift) -> list[Case]:  # noqa: ANN001 - contract_cases' uplift(case, problem, speed)
+    """The two-pantograph cases: named with their spacing, so that a stored result is never served for
+    another one."""
+    speed, tag = TRAIN_SPEED_KMH, f"2p{TRAIN_SPACING:.0f}"
+    cases = []
+    for name, problem in PROBLEMS.items():
+        x = problem.reference_x()
+        x = () if x is None else tuple(float(v) for v in x)
+        force = uplift(f"{name} reference {speed:.0f}", name, speed)
+        cases.append(
+            Case(f"{name} {tag} reference {speed:.0f}", name, x, speed, force, False, spacing=TRAIN_SPACING)
+        )
+    for name in TRAIN_PROBLEMS:
+        force = uplift(f"{name} random 00", name, speed)
+        for i, x in enumerate(_random_designs(name, RANDOM_DESIGNS, SEED)):
+            cases.append(
+                Case(f"{name} {tag} random {i:02d}", name, x, speed, force, True, spacing=TRAIN_SPACING)
+            )
     return cases
 
 
@@ -145,7 +178,11 @@ def _en_fidelity(dynamics: str) -> Fidelity:
 
 
 def run_case(case: Case, dynamics: str) -> dict:
-    """Statistics of one case on one model (``"exact"`` or ``"span-modes"``)."""
+    """Statistics of one case on one model (``"exact"`` or ``"span-modes"``); with a trailing pantograph,
+    each pantograph's too (``"pantographs"``)."""
+    train = SINGLE
+    if case.spacing:
+        train = Train.behind([PROBLEMS[case.problem].pantograph_definition], case.spacing)
     if case.problem and case.x:
         fidelity = dataclasses.replace(FIDELITIES["study"], dynamics=dynamics)
         problem = PROBLEMS[case.problem]
@@ -153,7 +190,7 @@ def run_case(case: Case, dynamics: str) -> dict:
         if case.draw >= 0:
             tolerances = Tolerances(case.tolerance_mm / 1000.0, PRACTICE.position, PRACTICE.distribution)
             deviations = draw_deviations(tolerances, fidelity.n_spans, problem.n_droppers, SEED, case.draw)
-        ev = problem.evaluate(case.x, case.speed_kmh, fidelity, case.uplift_force, deviations)
+        ev = problem.evaluate(case.x, case.speed_kmh, fidelity, case.uplift_force, deviations, train=train)
     elif case.problem:  # B3 and SW3 are compared with the level wire on the preset's droppers
         problem = PROBLEMS[case.problem]
         fidelity = dataclasses.replace(FIDELITIES["study"], dynamics=dynamics)
@@ -164,6 +201,7 @@ def run_case(case: Case, dynamics: str) -> dict:
             case.speed_kmh / 3.6,
             fidelity,
             uplift_force=case.uplift_force,
+            train=train,
         )
     else:
         catenary = load_catenary("en50318-2002")
@@ -176,7 +214,26 @@ def run_case(case: Case, dynamics: str) -> dict:
             uplift_force=case.uplift_force,
         )
     stats = ev.statistics.as_dict() if ev.statistics is not None else None
-    return {"feasible": ev.feasible, "reason": ev.reason, "statistics": stats, "wall_time": ev.wall_time}
+    result = {"feasible": ev.feasible, "reason": ev.reason, "statistics": stats, "wall_time": ev.wall_time}
+    if case.spacing:
+        result["pantographs"] = [s.as_dict() for s in ev.pantograph_statistics]
+    return result
+
+
+def pantograph_rows(cases: list[Case], results: dict[str, dict]) -> dict[str, dict]:
+    """Each two-pantograph case as one result per pantograph (``"<case> leading"``, ``"<case> trailing"``,
+    its statistics, feasible when that pantograph keeps contact); the other cases as they are."""
+    out = {}
+    for case in cases:
+        result = results[case.name]
+        if not case.spacing:
+            out[case.name] = result
+            continue
+        blocks = result.get("pantographs") or [None] * len(PANTOGRAPH_ROWS)
+        for which, stats in zip(PANTOGRAPH_ROWS, blocks, strict=True):
+            feasible = stats is not None and stats["contact_loss_percent"] == 0.0
+            out[f"{case.name} {which}"] = result | {"statistics": stats, "feasible": feasible}
+    return out
 
 
 def _exact_part(fidelity: Fidelity) -> dict:
@@ -242,13 +299,14 @@ def _errors(ref: dict, red: dict) -> dict[str, float]:
 
 
 def evaluate_contract(cases: list[Case], reference: dict, reduced: dict) -> dict:
+    reference, reduced = pantograph_rows(cases, reference), pantograph_rows(cases, reduced)
     rows = []
-    for case in cases:
-        ref, red = reference[case.name], reduced[case.name]
+    for name in reduced:
+        ref, red = reference[name], reduced[name]
         err = _errors(ref, red)
         rows.append(
             {
-                "case": case.name,
+                "case": name,
                 "std_reference": ref["statistics"]["std"] if ref["statistics"] else None,
                 "std_study": red["statistics"]["std"] if red["statistics"] else None,
                 "feasible_reference": ref["feasible"],
@@ -264,11 +322,15 @@ def evaluate_contract(cases: list[Case], reference: dict, reduced: dict) -> dict
     ext_err = np.abs([max(abs(r["error_max"]), abs(r["error_min"])) for r in compared])
     verdicts_agree = all(r["feasible_reference"] == r["feasible_study"] for r in rows)
     spearman = {}
-    for name in RANDOM_PROBLEMS:
-        picked = [r for r in compared if r["case"].startswith(f"{name} random")]
+    groups = {name: (f"{name} random", "") for name in RANDOM_PROBLEMS}
+    for name in TRAIN_PROBLEMS:
+        for which in PANTOGRAPH_ROWS:
+            groups[f"{name} 2p {which}"] = (f"{name} 2p{TRAIN_SPACING:.0f} random", which)
+    for group, (prefix, suffix) in groups.items():
+        picked = [r for r in compared if r["case"].startswith(prefix) and r["case"].endswith(suffix)]
         if len(picked) >= 3:
             rho = spearmanr([r["std_reference"] for r in picked], [r["std_study"] for r in picked]).statistic
-            spearman[name] = float(rho)
+            spearman[group] = float(rho)
     en = [r for r in compared if r["case"].startswith("EN50318")]
     en_uplift = max((abs(r["error_uplift"]) for r in en), default=0.0)
     checks = {
@@ -305,8 +367,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--recompute", action="store_true", help="recompute the reference results")
     parser.add_argument("--reference-only", action="store_true", help="only compute the reference results")
     parser.add_argument("--only", metavar="TEXT", help="only the cases whose name contains TEXT")
+    parser.add_argument("--trains-only", action="store_true", help="only the two-pantograph cases")
     args = parser.parse_args(argv)
     cases = [c for c in contract_cases() if args.only is None or args.only in c.name]
+    if args.trains_only:
+        cases = [c for c in cases if c.spacing]
     reference = reference_results(cases, args.workers, args.recompute)
     if args.reference_only:
         return 0

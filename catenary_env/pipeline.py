@@ -37,6 +37,7 @@ from .model.design import Design, DesignError, check_design, check_speed
 from .model.presets import load_acceptance
 from .model.tolerances import SectionDeviations, check_deviations
 from .statics.shape_finding import ShapeFindingError, StaticSolution, find_shape
+from .train import SINGLE, Train, objective_sigma
 
 NEAR_CUTOFF = math.inf
 """Hz: modes kept near the pantograph: every one (the convergence study, docs/performance.md: a dropper
@@ -134,6 +135,10 @@ class Evaluation:
         The values of the feasibility constraints named in :data:`CONSTRAINTS`, in that order; the design
         is feasible when every one is <= 0 (docs/model.md, 'Statistics and feasibility'). NaN where not
         computed: every one when shape-finding failed, the contact loss when no passage was simulated.
+    pantograph_statistics : tuple of ContactStatistics
+        Every pantograph's statistics, the leading one first (its ``statistics``); empty when unsimulated.
+    objective_sigma : float or None
+        The train's objective σ, N, where the train has several pantographs (:attr:`sigma` reads it).
     """
 
     feasible: bool
@@ -147,6 +152,16 @@ class Evaluation:
     trace_force: tuple[float, ...] = ()
     acceptance: Acceptance | None = None
     constraints: tuple[float, ...] = ()
+    pantograph_statistics: tuple[ContactStatistics, ...] = ()
+    objective_sigma: float | None = None
+
+    @property
+    def sigma(self) -> float | None:
+        """The objective σ, N: the train's objective pantograph(s)' (:class:`~catenary_env.train.Train`), the
+        leading one's by default; None when unsimulated."""
+        if self.objective_sigma is not None:
+            return self.objective_sigma
+        return None if self.statistics is None else self.statistics.std
 
 
 TRACE_POINTS = 1000
@@ -176,6 +191,10 @@ class Simulation:
         The 20 Hz low-pass filtered contact force at every step, N (filtered once, here).
     acceptance : Acceptance or None
         The EN 50367 acceptance block of the passage (docs/acceptance.md).
+    pantograph_statistics : tuple of ContactStatistics
+        Every pantograph's statistics, the leading one first (``statistics``).
+    filtered_forces : tuple of ndarray
+        Every pantograph's filtered contact force, the leading one first (``filtered_force``).
     """
 
     static: StaticSolution
@@ -186,6 +205,8 @@ class Simulation:
     uplift_force: float
     filtered_force: NDArray[np.float64]
     acceptance: Acceptance | None = None
+    pantograph_statistics: tuple[ContactStatistics, ...] = ()
+    filtered_forces: tuple[NDArray[np.float64], ...] = ()
 
 
 ACCEPTANCE = "en50367-ac"
@@ -310,6 +331,7 @@ def run_passage(
     progress: Callable[[float], None] | None = None,
     prepared: PreparedExact | PreparedSpanModes | None = None,
     statistics_only: bool = False,
+    train: Train = SINGLE,
 ) -> Simulation:
     """The pantograph's dynamic passage at ``speed`` (m/s) over a solved static state (the design must be
     statically feasible), on the fidelity's dynamic model
@@ -321,7 +343,8 @@ def run_passage(
     over that span), and the trajectory ends there. The force on the pantograph's frame follows the
     catenary's ``modelling.uplift_definition``; a system that is not Rayleigh-damped
     (:attr:`LinearSystem.rayleigh`) runs the exact model's straightforward loop (its oracle), minutes rather
-    than seconds.
+    than seconds. ``train`` adds pantographs behind this one (docs/model.md, 'Several pantographs'); the
+    statistics are then taken for each.
     """
     catenary = static.layout.catenary
     system = linearise(static) if system is None else system
@@ -329,19 +352,38 @@ def run_passage(
         check_fidelity(catenary, fidelity)  # the span-mode model refuses it
     model = DYNAMIC_MODELS[fidelity.dynamics]
     prepared = model.prepare(system, fidelity) if prepared is None else prepared
-    n_steps = _statistics_steps(catenary, fidelity, speed) if statistics_only and model.stops_early else None
-    point = ContactPoint(pantograph, frame_force(system, pantograph, uplift_force))
-    trajectory = model.run(prepared, Passage(speed, (point,), n_steps=n_steps, progress=progress))
     window = analysis_window(catenary, fidelity)
-    filtered = filtered_contact_force(trajectory)
-    stats = passage_statistics(trajectory, window, filtered)
-    acceptance = assess(stats, speed * 3.6, default_acceptance())
-    return Simulation(static, system, trajectory, stats, window, uplift_force, filtered, acceptance)
+    train.check(catenary, fidelity.n_spans, window[1])
+    last = train.trailing[-1].offset if train.trailing else 0.0
+    n_steps = (
+        _statistics_steps(catenary, fidelity, speed, last) if statistics_only and model.stops_early else None
+    )
+    points = [ContactPoint(pantograph, frame_force(system, pantograph, uplift_force))]
+    for t in train.trailing:
+        force = uplift_force if t.uplift_force is None else t.uplift_force
+        points.append(ContactPoint(t.pantograph, frame_force(system, t.pantograph, force), t.offset))
+    trajectory = model.run(prepared, Passage(speed, tuple(points), n_steps=n_steps, progress=progress))
+    filtered = tuple(filtered_contact_force(trajectory.of_pantograph(i)) for i in range(len(points)))
+    stats = tuple(passage_statistics(trajectory.of_pantograph(i), window, f) for i, f in enumerate(filtered))
+    acceptance = assess(stats[0], speed * 3.6, default_acceptance())
+    return Simulation(
+        static,
+        system,
+        trajectory,
+        stats[0],
+        window,
+        uplift_force,
+        filtered[0],
+        acceptance,
+        pantograph_statistics=stats,
+        filtered_forces=filtered,
+    )
 
 
-def _statistics_steps(catenary: CatenaryDefinition, fidelity: Fidelity, speed: float) -> int:
-    """Steps until the pantograph is one span past the analysis section."""
-    end = analysis_window(catenary, fidelity)[1] + catenary.span_length
+def _statistics_steps(catenary: CatenaryDefinition, fidelity: Fidelity, speed: float, offset: float) -> int:
+    """Steps until the last pantograph, ``offset`` m behind the first, is one span past the analysis
+    section."""
+    end = analysis_window(catenary, fidelity)[1] + catenary.span_length + offset
     return int(np.floor(end / (speed * fidelity.time_step))) + 1
 
 
@@ -364,9 +406,10 @@ def simulate(
     progress: Callable[[float], None] | None = None,
     buildability: BuildabilityLimits = NO_LIMITS,
     deviations: SectionDeviations | None = None,
+    train: Train = SINGLE,
 ) -> Simulation:
-    """Shape-finding, linearisation and the pantograph passage at ``speed`` (m/s); ``buildability`` and
-    ``deviations`` as in :func:`evaluate`.
+    """Shape-finding, linearisation and the pantograph passage at ``speed`` (m/s), with the ``train``'s
+    pantographs behind this one; ``buildability`` and ``deviations`` as in :func:`evaluate`.
 
     Raises
     ------
@@ -384,7 +427,7 @@ def simulate(
     reason = static.infeasibility() or buildability_violation(static, buildability)
     if reason:
         raise ValueError(f"design is infeasible: {reason}")
-    return run_passage(static, pantograph, speed, fidelity, force, progress=progress)
+    return run_passage(static, pantograph, speed, fidelity, force, progress=progress, train=train)
 
 
 def evaluate(
@@ -396,8 +439,10 @@ def evaluate(
     uplift_force: float | None = None,
     buildability: BuildabilityLimits = NO_LIMITS,
     deviations: SectionDeviations | None = None,
+    train: Train = SINGLE,
 ) -> Evaluation:
-    """Simulate one design at one speed (m/s) and return its feasibility and statistics.
+    """Simulate one design at one speed (m/s) and return its feasibility and statistics (of every pantograph
+    of the ``train``; contact lost by any makes it infeasible).
 
     Bad input raises :class:`DesignError` before any solve; an infeasible design (static: compressed
     dropper, negative dropper length, or a shape-finding that does not converge; a buildability limit
@@ -410,7 +455,10 @@ def evaluate(
     check_design(catenary, design)
     check_fidelity(catenary, fidelity)
     check_section_deviations(catenary, design, fidelity, deviations)
-    return evaluate_unchecked(catenary, pantograph, design, speed, fidelity, force, buildability, deviations)
+    train.check(catenary, fidelity.n_spans, analysis_window(catenary, fidelity)[1])
+    return evaluate_unchecked(
+        catenary, pantograph, design, speed, fidelity, force, buildability, deviations, train
+    )
 
 
 @single_threaded
@@ -423,6 +471,7 @@ def evaluate_unchecked(
     uplift_force: float,
     buildability: BuildabilityLimits = NO_LIMITS,
     deviations: SectionDeviations | None = None,
+    train: Train = SINGLE,
 ) -> Evaluation:
     """:func:`evaluate` without its input checks, for a caller that has made them (a design problem).
 
@@ -444,19 +493,23 @@ def evaluate_unchecked(
         wall_time = time.perf_counter() - start
         constraints = _constraints(static, math.nan)
         return Evaluation(False, reason, None, lengths, forces, force, wall_time, constraints=constraints)
-    sim = run_passage(static, pantograph, speed, fidelity, force, statistics_only=True)
-    stats = sim.statistics
-    if stats.contact_loss_percent > 0.0:
-        reason = (
-            f"dynamic: contact lost {stats.contact_loss_percent:.3f} % of the time in the analysis section"
-        )
+    sim = run_passage(static, pantograph, speed, fidelity, force, statistics_only=True, train=train)
+    for i, stats in enumerate(sim.pantograph_statistics):
+        if stats.contact_loss_percent > 0.0 and not reason:
+            which = f"pantograph {i + 1}: " if train.trailing else ""
+            reason = (
+                f"dynamic: {which}contact lost {stats.contact_loss_percent:.3f} % of the time in the "
+                "analysis section"
+            )
     position, filtered = _trace(sim)
-    constraints = _constraints(static, stats.contact_loss_percent)
+    blocks = sim.pantograph_statistics
+    objective = objective_sigma(blocks, train.objective) if train.trailing else None
+    constraints = _constraints(static, max(stats.contact_loss_percent for stats in blocks))
     wall_time = time.perf_counter() - start
     return Evaluation(
         not reason,
         reason,
-        stats,
+        sim.statistics,
         lengths,
         forces,
         force,
@@ -465,6 +518,8 @@ def evaluate_unchecked(
         filtered,
         acceptance=sim.acceptance,
         constraints=constraints,
+        pantograph_statistics=blocks,
+        objective_sigma=objective,
     )
 
 

@@ -14,8 +14,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from catenary_env.analysis.statistics import ContactStatistics
+from catenary_env.fingerprint import model_fingerprint
 from catenary_env.pipeline import CONSTRAINTS
 from catenary_env.problems import evaluate_problem, get_problem
+from catenary_env.train import SINGLE, Train
 
 from .problem import Outcome, SimulateFunction
 
@@ -26,7 +28,7 @@ STATISTICS = tuple(ContactStatistics.__dataclass_fields__)
 
 
 def simulate_catenary_design(
-    problem_name: str, x: tuple[float, ...], speed_kmh: float, fidelity: str
+    problem_name: str, x: tuple[float, ...], speed_kmh: float, fidelity: str, train: Train = SINGLE
 ) -> Outcome:
     """Simulate a design of a registered catenary design problem: picklable, for worker processes.
 
@@ -40,10 +42,12 @@ def simulate_catenary_design(
         Train speed, km/h.
     fidelity : str
         ``"study"`` or ``"test"``.
+    train : Train
+        Pantographs behind the leading one and the objective's: σ is :attr:`Evaluation.sigma`.
     """
-    evaluation = evaluate_problem(problem_name, tuple(x), float(speed_kmh), fidelity)
+    evaluation = evaluate_problem(problem_name, tuple(x), float(speed_kmh), fidelity, train=train)
     statistics = evaluation.statistics
-    sigma = None if statistics is None else float(statistics.std)
+    sigma = None if evaluation.sigma is None else float(evaluation.sigma)
     constraints = tuple(float(v) for v in evaluation.constraints)
     values = () if statistics is None else tuple(float(getattr(statistics, n)) for n in STATISTICS)
     return Outcome(
@@ -70,14 +74,18 @@ class CatenaryProblem:
     model_fingerprint: str = ""
     constraint_names: tuple[str, ...] = CONSTRAINTS
     statistic_names: tuple[str, ...] = STATISTICS
+    train: Train = SINGLE
 
     @property
     def simulate(self) -> SimulateFunction:
-        return functools.partial(simulate_catenary_design, self.name)
+        if self.train == SINGLE:
+            return functools.partial(simulate_catenary_design, self.name)
+        return functools.partial(simulate_catenary_design, self.name, train=self.train)
 
 
-def catenary_problem(name: str) -> CatenaryProblem:
-    """Adapt the design problem ``name`` of ``catenary_env.problems`` (e.g. ``"B1"``).
+def catenary_problem(name: str, train: Train = SINGLE) -> CatenaryProblem:
+    """Adapt the design problem ``name`` of ``catenary_env.problems`` (e.g. ``"B1"``), with the ``train``'s
+    pantographs behind the leading one (its objective's σ; the stored results' key includes it).
 
     Raises
     ------
@@ -94,5 +102,8 @@ def catenary_problem(name: str) -> CatenaryProblem:
         np.array(problem.lower, dtype=np.float64),
         np.array(problem.upper, dtype=np.float64),
         np.array(problem.step, dtype=np.float64),
-        problem.store_fingerprint(),
+        problem.store_fingerprint()
+        if train == SINGLE
+        else model_fingerprint(problem.store_fingerprint(), train),
+        train,
     )

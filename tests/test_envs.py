@@ -46,7 +46,9 @@ class FakeSimulator:
     calls: list[tuple[Design, float]] = field(default_factory=list)
     calibrations: int = 0
 
-    def evaluate(self, catenary, pantograph, design, speed, fidelity, uplift_force=None, *options):  # type: ignore[no-untyped-def]
+    def evaluate(
+        self, catenary, pantograph, design, speed, fidelity, uplift_force=None, *options, train=None
+    ):  # type: ignore[no-untyped-def]
         self.calls.append((design, speed))
         offsets = np.asarray(design.contact_wire_offsets)
         spacing = np.diff(np.concatenate([[0.0], design.dropper_positions, [catenary.span_length]]))

@@ -36,6 +36,7 @@ LAYERS = (
     ("catenary_env.analysis",),
     (
         "catenary_env.pipeline",
+        "catenary_env.train",
         "catenary_env.validation",
         "catenary_env.blas_threads",
         "catenary_env.fingerprint",

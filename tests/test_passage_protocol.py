@@ -1,5 +1,5 @@
 """The passage protocol (docs/model.md, 'Time integration and the fast method'): both dynamic models from one
-table, a passage of several pantographs refused clearly while the loops take one, and the numbers the time
+table, a passage of several pantographs refused clearly where a loop cannot take it, and the numbers the time
 loops gave before the protocol (tests/data/recorded_passages.npz) reproduced through it."""
 
 from __future__ import annotations
@@ -45,17 +45,30 @@ def test_the_span_mode_model_reproduces_the_recorded_evaluation_passage(
     assert_recorded(recorded_passages, "span_modes_pipeline_numba", sim.trajectory, sim.statistics.std)
 
 
-@pytest.mark.parametrize("dynamics", list(DYNAMIC_MODELS))
-def test_a_second_pantograph_is_refused_by_name(dynamics, benchmark_static, benchmark_pantograph_definition):
+def test_the_oracle_refuses_a_second_pantograph_by_name(benchmark_static, benchmark_pantograph_definition):
     from catenary_env.dynamics.linear_system import linearise
 
-    model = DYNAMIC_MODELS[dynamics]
-    fidelity = Fidelity(n_spans=5, time_step=2e-3, dynamics=dynamics)
-    prepared = model.prepare(linearise(benchmark_static), fidelity)
+    model = DYNAMIC_MODELS["exact"]
+    prepared = model.prepare(
+        linearise(benchmark_static), Fidelity(n_spans=5, time_step=2e-3, dynamics="exact")
+    )
     first = ContactPoint(benchmark_pantograph_definition, 170.0)
     second = ContactPoint(benchmark_pantograph_definition, 170.0, offset=20.0)
-    with pytest.raises(ValueError, match="passage.contact_points: 2 pantographs"):
-        model.run(prepared, Passage(SPEED, (first, second), n_steps=5))
+    with pytest.raises(ValueError, match="passage.contact_points: 2 pantographs; this loop takes one"):
+        model.run(prepared, Passage(SPEED, (first, second), n_steps=5, backend="oracle"))
+
+
+def test_the_span_mode_model_refuses_two_pantographs_in_one_span(
+    benchmark_static, benchmark_pantograph_definition
+):
+    from catenary_env.dynamics.linear_system import linearise
+
+    model = DYNAMIC_MODELS["span-modes"]
+    prepared = model.prepare(linearise(benchmark_static), Fidelity(n_spans=5, time_step=2e-3))
+    first = ContactPoint(benchmark_pantograph_definition, 170.0)
+    second = ContactPoint(benchmark_pantograph_definition, 170.0, offset=20.0)
+    with pytest.raises(ValueError, match="pantographs 1 and 2 in one span"):
+        model.run(prepared, Passage(SPEED, (first, second), n_steps=200))
 
 
 def test_a_passage_names_its_wrong_field(benchmark_pantograph_definition):
@@ -66,5 +79,7 @@ def test_a_passage_names_its_wrong_field(benchmark_pantograph_definition):
         Passage(SPEED, ())
     with pytest.raises(ValueError, match="the first pantograph's 0"):
         Passage(SPEED, (ContactPoint(benchmark_pantograph_definition, 170.0, offset=5.0),))
+    with pytest.raises(ValueError, match="in order behind it"):
+        Passage(SPEED, (point, ContactPoint(benchmark_pantograph_definition, 170.0, offset=-5.0)))
     with pytest.raises(ValueError, match="passage.n_steps"):
         Passage(SPEED, (point,), n_steps=0)

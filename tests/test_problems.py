@@ -314,7 +314,7 @@ def test_uplift_is_calibrated_once_per_catenary_speed_and_fidelity_on_the_refere
         calls.append((catenary.name, design, speed, fidelity, target_mean))
         return target_mean + 3.0
 
-    def evaluate(catenary, pantograph, design, speed, fidelity, uplift_force=None, *options):  # type: ignore[no-untyped-def]
+    def evaluate(catenary, pantograph, design, speed, fidelity, uplift_force=None, *options, train=None):  # type: ignore[no-untyped-def]
         used.append(uplift_force)
         return Evaluation(True, "", None, (), (), float(uplift_force), 0.0)
 

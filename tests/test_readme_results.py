@@ -97,3 +97,24 @@ def test_the_committed_rl_study_is_the_full_one_on_b1_and_sw1():
         for speed in (200, 260, 300, 320):
             assert runs[f"sigma at {speed} km/h"]["n_simulations"] == "1000", (problem, speed)
         assert runs["mean sigma over 7 speeds, 200-320 km/h"]["budget"] == "300", problem
+
+
+def test_the_readme_two_pantograph_table_is_the_committed_study():
+    """Each README row of the two-pantograph table: σ of each pantograph and the trailing one's contact loss
+    as ``results/pantographs/optima.csv`` has them (the study fidelity)."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    table = text[text.index("| problem | design | σ leading (N) | σ trailing (N) |") :].split("\n\n")[0]
+    committed = {
+        (r["problem"], r["design"]): r for r in _rows(ROOT / "results" / "pantographs" / "optima.csv")
+    }
+    lines = table.splitlines()[2:]
+    assert lines
+    for line in lines:
+        problem, design, leading, trailing, loss, _ = (cell.strip() for cell in line.strip("|").split("|"))
+        row = committed[(problem, design)]
+        assert [leading, trailing] == [
+            f"{float(row['sigma_leading_N']):.2f}",
+            f"{float(row['sigma_trailing_N']):.2f}",
+        ]
+        loss_value = float(row["loss_trailing_percent"])
+        assert loss == ("0" if loss_value == 0.0 else f"{loss_value:.2f} %"), (problem, design)

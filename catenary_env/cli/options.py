@@ -20,6 +20,7 @@ from .paths import check_output_path
 if TYPE_CHECKING:
     from ..model.design import Design
     from ..pipeline import Fidelity
+    from ..train import Train
 
 FIDELITY_NAMES = ("reference", "study", "test")
 """The names of :data:`~catenary_env.pipeline.FIDELITIES` (kept here so that building the parser imports
@@ -255,3 +256,47 @@ def save_figure(fig: Any, path: str) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     print(f"saved {path}", file=sys.stderr)
+
+
+def add_train_arguments(parser: argparse.ArgumentParser, objective: bool = False) -> None:
+    """``--pantographs`` and ``--spacing`` (and, for a design objective, ``--pantograph-objective``):
+    pantographs behind the leading one (docs/model.md, 'Several pantographs')."""
+    parser.add_argument(
+        "--pantographs",
+        metavar="NAME,NAME",
+        help="the train's pantographs, leading one first (presets or .toml files, e.g. benchmark,benchmark); "
+        "each trailing one has the leading one's uplift force (default: one pantograph, --pantograph)",
+    )
+    parser.add_argument(
+        "--spacing",
+        type=float,
+        default=200.0,
+        metavar="M",
+        help="distance between successive pantographs, m (default 200)",
+    )
+    if objective:
+        parser.add_argument(
+            "--pantograph-objective",
+            default="leading",
+            metavar="WHOSE",
+            help="whose σ the objective is with several pantographs: leading, trailing, worst (the larger) "
+            "or mean (default leading)",
+        )
+
+
+def train_of(
+    args: argparse.Namespace, pantograph: PantographDefinition
+) -> tuple[PantographDefinition, Train]:
+    """The leading pantograph (``pantograph`` unless ``--pantographs`` names one) and the train behind it."""
+    from ..train import SINGLE, Train  # numpy: not at the command line's start
+
+    if not getattr(args, "pantographs", None):
+        return pantograph, SINGLE
+    names = [name.strip() for name in args.pantographs.split(",")]
+    if not all(names):
+        raise UsageError(
+            f"--pantographs {args.pantographs}: names separated by commas, e.g. benchmark,benchmark"
+        )
+    objective = getattr(args, "pantograph_objective", "leading")
+    pantographs = [pantograph_of(name) for name in names]
+    return pantographs[0], Train.behind(pantographs[1:], args.spacing, objective)

@@ -18,6 +18,7 @@ from .progress import ProgressDisplay
 if TYPE_CHECKING:
     from ..model.definition import CatenaryDefinition, PantographDefinition
     from ..pipeline import Fidelity
+    from ..train import Train
 
 UNITS = {
     "speed_kmh": "km/h",
@@ -50,6 +51,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="calibrate the uplift so the reference design's mean contact force is this, N "
         "(default: EN 50367, 0.00097 v² + 70 with v in km/h)",
     )
+    options.add_train_arguments(p)
     options.add_design_arguments(p)
     options.add_buildability_argument(p)
     options.add_acceptance_argument(p)
@@ -60,7 +62,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Simulate the passage and print its statistics (text or JSON); 0."""
     from ..model.design import check_design, check_speed, physical_warnings
-    from ..pipeline import check_fidelity, check_uplift, run_passage, solve_static
+    from ..pipeline import analysis_window, check_fidelity, check_uplift, run_passage, solve_static
 
     options.check_plot(args)
     if args.target_mean is not None and not (math.isfinite(args.target_mean) and args.target_mean > 0.0):
@@ -68,12 +70,14 @@ def run(args: argparse.Namespace) -> int:
     catenary = options.catenary_of(args.preset)
     pantograph = options.pantograph_of(args.pantograph or catenary.pantograph)
     limits = options.acceptance_limits(args)
+    pantograph, train = options.train_of(args, pantograph)
     design = options.design(catenary, args)
     fidelity = options.fidelity(catenary, args)
     speed = args.speed / 3.6
     check_speed(catenary, speed)
     check_design(catenary, design)
     check_fidelity(catenary, fidelity)
+    train.check(catenary, fidelity.n_spans, analysis_window(catenary, fidelity)[1])
     calibrate = args.uplift is None and pantograph.uplift_force is None
     uplift = None if calibrate else check_uplift(pantograph, args.uplift)
     for warning in physical_warnings(catenary, speed, uplift):
@@ -92,13 +96,13 @@ def run(args: argparse.Namespace) -> int:
         times["calibration_time"] = time.perf_counter() - start
     progress = ProgressDisplay("simulate", 1.0, quiet=args.json)
     start = time.perf_counter()
-    sim = run_passage(static, pantograph, speed, fidelity, uplift, progress=progress.fraction)
+    sim = run_passage(static, pantograph, speed, fidelity, uplift, progress=progress.fraction, train=train)
     progress.finish()
     sim = dataclasses.replace(
         sim, acceptance=options.reassessed(limits, sim.statistics, args.speed, sim.acceptance)
     )
     times["passage_time"] = time.perf_counter() - start
-    result = _record(args, catenary, pantograph, fidelity, sim, calibrate, times)
+    result = _record(args, catenary, pantograph, fidelity, sim, calibrate, times, train)
     print(json.dumps(result, indent=2) if args.json else _text(result, args, sim))
     if args.plot:
         _figure(sim, catenary.name, args.speed, args.plot)
@@ -129,10 +133,12 @@ def _record(
     sim: Any,
     calibrated: bool,
     times: dict[str, float],
+    train: Train,
 ) -> dict[str, Any]:
-    """The result as the JSON object of ``--json`` (SI units, :data:`UNITS`)."""
+    """The result as the JSON object of ``--json`` (SI units, :data:`UNITS`); with several pantographs,
+    ``statistics`` is the leading one's and ``pantographs`` lists each one's, ``feasible`` covers all."""
     stats = sim.statistics.as_dict()
-    return {
+    record = {
         "preset": catenary.name,
         "pantograph": pantograph.name,
         "speed_kmh": args.speed,
@@ -147,6 +153,15 @@ def _record(
         **times,
         "units": UNITS,
     }
+    if train.trailing:
+        offsets = (0.0, *(t.offset for t in train.trailing))
+        names = (pantograph.name, *(t.pantograph.name for t in train.trailing))
+        record["pantographs"] = [
+            {"pantograph": name, "offset": offset, "statistics": s.as_dict()}
+            for name, offset, s in zip(names, offsets, sim.pantograph_statistics, strict=True)
+        ]
+        record["feasible"] = all(s.contact_loss_percent == 0.0 for s in sim.pantograph_statistics)
+    return record
 
 
 def _text(result: dict[str, Any], args: argparse.Namespace, sim: Any) -> str:
@@ -161,7 +176,13 @@ def _text(result: dict[str, Any], args: argparse.Namespace, sim: Any) -> str:
         f"(shape {result['shape_time']:.2f} s{calibration}, passage {result['passage_time']:.2f} s)"
     )
     acceptance = sim.acceptance.text_lines() if sim.acceptance is not None else []
-    return "\n".join([head, *sim.statistics.text_lines(), *acceptance])
+    if "pantographs" not in result:
+        return "\n".join([head, *sim.statistics.text_lines(), *acceptance])
+    lines = [head]
+    for i, (entry, stats) in enumerate(zip(result["pantographs"], sim.pantograph_statistics, strict=True)):
+        lines.append(f"pantograph {i + 1} ({entry['pantograph']}, {entry['offset']:g} m behind the first):")
+        lines.extend(stats.text_lines())
+    return "\n".join([*lines, *acceptance])
 
 
 def _figure(sim: Any, name: str, speed_kmh: float, path: str) -> None:

@@ -2,10 +2,10 @@
 
 docs/model.md, 'Time integration and the fast method'. Given what the step would be without the
 two nonlinear forces (the contact gap ``gap_known``, the droppers' elongations ``dl_known``), and
-the one-step compliances (the contact point's ``c_cc``, the droppers' ``g_dc`` to the contact and
-``G`` among themselves), find the contact force f ≥ 0 and the slack droppers' forces λ that cancel
-their whole linear force (spring and damping share). Each step is a linear complementarity problem
-with a P-matrix, so its solution is unique; the iteration below finds it.
+the one-step compliances (the contact points' ``c_cc`` among themselves, the droppers' ``g_dc`` to
+the contact points and ``G`` among themselves), find the contact forces f ≥ 0 of every pantograph and
+the slack droppers' forces λ that cancel their whole linear force (spring and damping share). Each step
+is a linear complementarity problem with a P-matrix, so its solution is unique; the iteration below finds it.
 
 The rules are written here only, twice side by side: :func:`settle` in numpy for the numpy loops and
 :func:`settle_in_place` in scalar loops, which numba compiles into both models' compiled loops
@@ -26,26 +26,30 @@ FULL_SWITCH_ITERATIONS = 8
 
 
 def switch_states(
-    contact: bool,
+    contact: np.ndarray,
     slack: np.ndarray,
-    new_contact: bool,
+    new_contact: np.ndarray,
     new_slack: np.ndarray,
-    contact_force: float,
+    contact_forces: np.ndarray,
     elastic: np.ndarray,
     iteration: int,
-) -> tuple[bool, np.ndarray]:
-    """Next contact / slack-dropper state of the active-set iteration.
+) -> tuple[np.ndarray, np.ndarray]:
+    """Next contact / slack-dropper states of the active-set iteration.
 
     The first iterations switch every inconsistent state at once (Newton's method on the
     piecewise-linear problem, quadratic when it works); should that cycle, later iterations switch
-    only the most violated one, which cannot cycle on this problem's P-matrix.
+    only the most violated one (a contact, by its force k_h gap, or a dropper), which cannot cycle on
+    this problem's P-matrix.
     """
     if iteration < FULL_SWITCH_ITERATIONS:
         return new_contact, new_slack
     violation = np.where(new_slack != slack, np.abs(elastic), 0.0)
-    contact_violation = abs(contact_force) if new_contact != contact else 0.0
-    if contact_violation >= violation.max(initial=0.0):
-        return new_contact, slack
+    contact_violation = np.where(new_contact != contact, np.abs(contact_forces), 0.0)
+    if contact_violation.max() >= violation.max(initial=0.0):
+        contact = contact.copy()
+        worst = int(np.argmax(contact_violation))
+        contact[worst] = new_contact[worst]
+        return contact, slack
     slack = slack.copy()
     worst = int(np.argmax(violation))
     slack[worst] = not slack[worst]
@@ -68,12 +72,12 @@ class Droppers(NamedTuple):
 
 
 class Settled(NamedTuple):
-    """The step's nonlinear forces.
+    """The step's nonlinear forces. P contact points, D droppers.
 
-    contact : bool
+    contact : ndarray (P,) of bool
     slack : ndarray (D,) of bool
-    force : float
-        Contact force f, N.
+    force : ndarray (P,)
+        Contact forces f, N.
     slack_droppers : ndarray (m,) of int
         The slack droppers' indices.
     slack_forces : ndarray (m,)
@@ -84,9 +88,9 @@ class Settled(NamedTuple):
         False when the iteration limit was reached.
     """
 
-    contact: bool
+    contact: np.ndarray
     slack: np.ndarray
-    force: float
+    force: np.ndarray
     slack_droppers: np.ndarray
     slack_forces: np.ndarray
     dropper_forces: np.ndarray
@@ -94,10 +98,10 @@ class Settled(NamedTuple):
 
 
 def settle(
-    contact: bool,
+    contact: np.ndarray,
     slack: np.ndarray,
-    gap_known: float,
-    c_cc: float,
+    gap_known: np.ndarray,
+    c_cc: np.ndarray,
     g_dc: np.ndarray,
     dl_known: np.ndarray,
     rate_term: np.ndarray,
@@ -105,16 +109,19 @@ def settle(
     droppers: Droppers,
     flexibility: np.ndarray,
 ) -> Settled:
-    """The contact force and slack droppers of one step, starting from the last step's state.
+    """The contact forces and slack droppers of one step, starting from the last step's state.
 
     Parameters
     ----------
-    gap_known : float
+    contact : ndarray (P,) of bool
+        Each contact point's last contact state.
+    gap_known : ndarray (P,)
         Head minus wire height without the step's contact and dropper forces, m.
-    c_cc : float
-        The contact point's compliance, m/N (the wire's and the pantograph head's).
-    g_dc : ndarray (D,)
-        The droppers' elongations per unit contact force, m/N.
+    c_cc : ndarray (P, P)
+        The contact points' compliances, m/N: the wire's at each point under a unit force at each point,
+        plus the pantograph head's own on the diagonal.
+    g_dc : ndarray (P, D)
+        The droppers' elongations per unit contact force at each point, m/N.
     dl_known, rate_term : ndarray (D,)
         The droppers' elongations without the step's forces, m, and their damping share, N.
     contact_stiffness : float
@@ -124,45 +131,53 @@ def settle(
         G, dropper elongations per unit dropper force, m/N.
     """
     kh, N0, kappa, G = contact_stiffness, droppers.force, droppers.kappa, flexibility
+    n_c = gap_known.size
+    points = np.arange(n_c)
     resolved = False
     for iteration in range(MAX_ACTIVE_SET_ITERATIONS):
         idx = np.flatnonzero(slack)
         m = idx.size
-        A = np.eye(1 + m)
-        r = np.zeros(1 + m)
-        if contact:
-            A[0, 0] = 1.0 + kh * c_cc
-            A[0, 1:] = kh * g_dc[idx]
-            r[0] = kh * gap_known
+        A = np.eye(n_c + m)
+        r = np.zeros(n_c + m)
+        touching = points[contact]
+        A[touching, :n_c] = kh * c_cc[touching]
+        A[touching, touching] += 1.0
+        A[np.ix_(touching, n_c + np.arange(m))] = kh * g_dc[np.ix_(touching, idx)]
+        r[touching] = kh * gap_known[touching]
         if m:
-            A[1:, 0] = -kappa[idx] * g_dc[idx]
-            A[1:, 1:] -= kappa[idx, None] * G[np.ix_(idx, idx)]
-            r[1:] = N0[idx] + kappa[idx] * dl_known[idx] - rate_term[idx]
-        sol = np.linalg.solve(A, r) if m else r / A[0, 0]
-        f, lam = sol[0], sol[1:]
-        dl = dl_known + g_dc * f + G[:, idx] @ lam
+            A[n_c:, :n_c] = -kappa[idx, None] * g_dc[:, idx].T
+            A[n_c:, n_c:] -= kappa[idx, None] * G[np.ix_(idx, idx)]
+            r[n_c:] = N0[idx] + kappa[idx] * dl_known[idx] - rate_term[idx]
+        sol = np.linalg.solve(A, r) if m or n_c > 1 else r / A[0, 0]
+        f, lam = sol[:n_c], sol[n_c:]
+        dl = dl_known + g_dc.T @ f + G[:, idx] @ lam
         elastic = N0 + kappa * dl - rate_term  # spring plus damping share
-        gap = gap_known - c_cc * f - g_dc[idx] @ lam
-        new_contact = bool(gap > 0.0)
+        gap = gap_known - c_cc @ f - g_dc[:, idx] @ lam
+        new_contact = gap > 0.0
         new_slack = elastic < 0.0
-        if new_contact == contact and np.array_equal(new_slack, slack):
+        if np.array_equal(new_contact, contact) and np.array_equal(new_slack, slack):
             resolved = True
             break
         contact, slack = switch_states(contact, slack, new_contact, new_slack, kh * gap, elastic, iteration)
-    return Settled(contact, slack, float(f), idx, lam, elastic, resolved)
+    return Settled(contact, slack, f, idx, lam, elastic, resolved)
 
 
 @compilable()
-def settle_workspace(n_droppers):  # noqa: ANN001, ANN201 - compilable
-    """The arrays :func:`settle_in_place` works in, for ``n_droppers`` droppers: A, r, λ, the slack
-    indices, the droppers' forces and the new slack states."""
+def settle_workspace(n_points, n_droppers):  # noqa: ANN001, ANN201 - compilable
+    """The arrays :func:`settle_in_place` works in, for ``n_points`` contact points and ``n_droppers``
+    droppers: A, r, λ, the slack indices, the droppers' forces, the new slack states, the contact forces f,
+    the new contact states and the gaps."""
+    size = n_points + n_droppers
     return (
-        np.zeros((n_droppers + 1, n_droppers + 1)),
-        np.zeros(n_droppers + 1),
+        np.zeros((size, size)),
+        np.zeros(size),
         np.zeros(n_droppers),
         np.zeros(n_droppers, dtype=np.int64),
         np.zeros(n_droppers),
         np.zeros(n_droppers, dtype=np.bool_),
+        np.zeros(n_points),
+        np.zeros(n_points, dtype=np.bool_),
+        np.zeros(n_points),
     )
 
 
@@ -192,69 +207,93 @@ def _small_solve(A, r, size):  # noqa: ANN001, ANN202 - compilable
 
 @compilable()
 def _step_system(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, droppers, G, work):  # noqa: ANN001, ANN202
-    """Fill A, r of :func:`settle`'s system for the current states and solve it; returns f and m (λ and the
+    """Fill A, r of :func:`settle`'s system for the current states and solve it; returns m (f, λ and the
     slack droppers' indices in ``work``)."""
-    A, r, lam, idx = work[0], work[1], work[2], work[3]
+    A, r, lam, idx, f = work[0], work[1], work[2], work[3], work[6]
     kappa, N0 = droppers.kappa, droppers.force
+    n_c = gap_known.size
     m = 0
     for q in range(slack.size):
         if slack[q]:
             idx[m] = q
             m += 1
-    for i in range(m + 1):
-        for j in range(m + 1):
+    size = n_c + m
+    for i in range(size):
+        for j in range(size):
             A[i, j] = 1.0 if i == j else 0.0
         r[i] = 0.0
-    if contact:
-        A[0, 0] = 1.0 + kh * c_cc
-        for i in range(m):
-            A[0, 1 + i] = kh * g_dc[idx[i]]
-        r[0] = kh * gap_known
+    for p in range(n_c):
+        if contact[p]:
+            for q in range(n_c):
+                A[p, q] = 1.0 + kh * c_cc[p, p] if q == p else kh * c_cc[p, q]
+            for i in range(m):
+                A[p, n_c + i] = kh * g_dc[p, idx[i]]
+            r[p] = kh * gap_known[p]
     for i in range(m):
         q = idx[i]
-        A[1 + i, 0] = -kappa[q] * g_dc[q]
+        for p in range(n_c):
+            A[n_c + i, p] = -kappa[q] * g_dc[p, q]
         for j in range(m):
-            A[1 + i, 1 + j] -= kappa[q] * G[q, idx[j]]
-        r[1 + i] = N0[q] + kappa[q] * dl_known[q] - rate_term[q]
-    if m:
-        _small_solve(A, r, m + 1)
+            A[n_c + i, n_c + j] -= kappa[q] * G[q, idx[j]]
+        r[n_c + i] = N0[q] + kappa[q] * dl_known[q] - rate_term[q]
+    if m or n_c > 1:
+        _small_solve(A, r, size)
     else:
         r[0] = r[0] / A[0, 0]
+    for p in range(n_c):
+        f[p] = r[p]
     for i in range(m):
-        lam[i] = r[1 + i]
-    return r[0], m
+        lam[i] = r[n_c + i]
+    return m
 
 
 @compilable()
-def settle_in_place(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, droppers, G, work):  # noqa: ANN001, ANN201
+def settle_in_place(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, droppers, G, work):  # noqa: ANN001, ANN201, C901
     """:func:`settle` in scalar loops, for the compiled loops; ``work`` from :func:`settle_workspace`.
 
-    Returns (contact, f, m, resolved); ``slack`` is updated in place, and ``work`` holds λ and the slack
-    droppers' indices in ``lam[:m]``, ``idx[:m]``, and the droppers' forces in ``elastic``.
+    Returns (m, resolved); ``contact`` and ``slack`` are updated in place, and ``work`` holds λ and the
+    slack droppers' indices in ``lam[:m]``, ``idx[:m]``, the droppers' forces in ``elastic`` and the contact
+    forces in ``f``.
     """
-    lam, idx, elastic, new_slack = work[2], work[3], work[4], work[5]
+    lam, idx, elastic, new_slack, f, new_contact, gap = (
+        work[2],
+        work[3],
+        work[4],
+        work[5],
+        work[6],
+        work[7],
+        work[8],
+    )
     kappa, N0 = droppers.kappa, droppers.force
     n_drop = slack.size
-    f = 0.0
+    n_c = gap_known.size
     m = 0
     for iteration in range(MAX_ACTIVE_SET_ITERATIONS):
-        f, m = _step_system(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, droppers, G, work)
-        gap = gap_known - c_cc * f
-        for i in range(m):
-            gap -= g_dc[idx[i]] * lam[i]
+        m = _step_system(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, droppers, G, work)
         changed = False
+        for p in range(n_c):
+            g = gap_known[p]
+            for q in range(n_c):
+                g -= c_cc[p, q] * f[q]
+            for i in range(m):
+                g -= g_dc[p, idx[i]] * lam[i]
+            gap[p] = g
+            new_contact[p] = g > 0.0
+            changed = changed or new_contact[p] != contact[p]
         for q in range(n_drop):
-            dl = dl_known[q] + g_dc[q] * f
+            dl = dl_known[q]
+            for p in range(n_c):
+                dl += g_dc[p, q] * f[p]
             for i in range(m):
                 dl += G[q, idx[i]] * lam[i]
             elastic[q] = N0[q] + kappa[q] * dl - rate_term[q]  # spring plus damping share
             new_slack[q] = elastic[q] < 0.0
             changed = changed or new_slack[q] != slack[q]
-        new_contact = gap > 0.0
-        if new_contact == contact and not changed:
-            return contact, f, m, True
+        if not changed:
+            return m, True
         if iteration < FULL_SWITCH_ITERATIONS:  # as switch_states
-            contact = new_contact
+            for p in range(n_c):
+                contact[p] = new_contact[p]
             for q in range(n_drop):
                 slack[q] = new_slack[q]
         else:
@@ -264,8 +303,15 @@ def settle_in_place(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, 
                 if new_slack[q] != slack[q] and (worst < 0 or abs(elastic[q]) > violation):
                     worst = q
                     violation = abs(elastic[q])
-            if (abs(kh * gap) if new_contact != contact else 0.0) >= violation:
-                contact = new_contact
+            worst_point = -1
+            contact_violation = 0.0
+            for p in range(n_c):
+                if new_contact[p] != contact[p] and (worst_point < 0 or abs(kh * gap[p]) > contact_violation):
+                    worst_point = p
+                    contact_violation = abs(kh * gap[p])
+            if contact_violation >= violation:
+                if worst_point >= 0:
+                    contact[worst_point] = new_contact[worst_point]
             else:
                 slack[worst] = not slack[worst]
-    return contact, f, m, False
+    return m, False

@@ -19,7 +19,7 @@ from .compilable import compilable
 from .linear_system import LinearSystem
 from .newmark import NewmarkConstants, StepCoefficients, passage_positions
 from .pantograph import pantograph_matrices, static_contact
-from .protocol import ContactPoint
+from .protocol import ContactPoint, Passage
 
 
 class ContactPointArrays(NamedTuple):
@@ -73,10 +73,20 @@ class StartedPoint(NamedTuple):
 
 
 def start_contact_point(
-    system: LinearSystem, point: ContactPoint, nm: NewmarkConstants, speed: float, n_steps: int | None
+    system: LinearSystem,
+    point: ContactPoint,
+    nm: NewmarkConstants,
+    speed: float,
+    n_steps: int | None,
 ) -> StartedPoint:
     """The pantograph's positions (at ``speed`` m/s, ``n_steps`` steps at most), contact-wire elements and
-    heights, matrices, and its static contact on the wire at the start."""
+    heights, matrices, and its static contact on the wire where it enters the section.
+
+    The train's first pantograph runs from the section's start to its end; this one follows it
+    ``point.offset`` m behind (docs/model.md, 'Several pantographs'). Before it reaches the section it
+    touches nothing (its element is -1 there): it waits in its static contact on the wire at the section's
+    start, which it meets in that state.
+    """
     lay = system.static.layout
     cat = lay.catenary
     pm = pantograph_matrices(point.pantograph)
@@ -84,14 +94,25 @@ def start_contact_point(
     inverse = np.linalg.inv(pm.stiffness + nm.a1 * pm.damping + nm.a0 * pm.mass)
     load = np.zeros(pm.mass.shape[0])
     load[0] = point.frame_force
-    time, position = passage_positions(lay.n_spans * lay.span_length, speed, nm.dt)
+    length = lay.n_spans * lay.span_length
+    time, position = passage_positions(length, speed, nm.dt)
     if n_steps is not None:
         time, position = time[:n_steps], position[:n_steps]
-    element, shape, wire_z = system.contact_wire.locate(position)
-    wire_z = wire_z - cat.contact_wire_height  # static height above nominal
+    if point.offset:
+        position = position - point.offset
+    on = np.flatnonzero((position >= 0.0) & (position <= length * (1.0 + 1e-12)))
+    element = np.full(position.size, -1, dtype=np.int64)
+    shape = np.zeros((position.size, 4))
+    wire_z = np.zeros(position.size)
+    if on.size == position.size:
+        element, shape, wire_z = system.contact_wire.locate(position)
+    elif on.size:
+        element[on], shape[on], wire_z[on] = system.contact_wire.locate(position[on])
+    wire_z[on] -= cat.contact_wire_height  # static height above nominal
     kh = cat.contact_stiffness
-    y0 = static_contact(pm, point.frame_force, kh, wire_z[0])[0]
-    force0 = kh * max(0.0, y0[head] - wire_z[0])
+    entry = int(on[0]) if on.size else 0
+    y0 = static_contact(pm, point.frame_force, kh, wire_z[entry])[0]
+    force0 = kh * max(0.0, y0[head] - wire_z[0]) if entry == 0 and on.size else 0.0
     arrays = ContactPointArrays(
         element=element.astype(np.int64),
         shape=np.ascontiguousarray(shape, dtype=float),
@@ -103,16 +124,29 @@ def start_contact_point(
         load=load,
     )
     state = PantographState(
-        y=y0, yd=np.zeros(head + 1), ydd=np.zeros(head + 1), contact=np.array([force0 > 0.0], dtype=np.int64)
+        y=y0,
+        yd=np.zeros(head + 1),
+        ydd=np.zeros(head + 1),
+        contact=np.array([force0 > 0.0 or entry > 0], dtype=np.int64),
     )
     return StartedPoint(arrays, state, time, position, force0)
 
 
-def initial_load(system: LinearSystem, started: StartedPoint) -> np.ndarray:
-    """The catenary's load (n,) under the initial contact force, N: the catenary starts at rest under it."""
+def start_train(system: LinearSystem, passage: Passage, nm: NewmarkConstants) -> tuple[StartedPoint, ...]:
+    """Every pantograph of the passage (:func:`start_contact_point`)."""
+    return tuple(
+        start_contact_point(system, point, nm, passage.speed, passage.n_steps)
+        for point in passage.contact_points
+    )
+
+
+def initial_load(system: LinearSystem, started: tuple[StartedPoint, ...]) -> np.ndarray:
+    """The catenary's load (n,) under the initial contact forces, N: it starts at rest under them."""
     load = np.zeros(system.n_dofs)
-    point = started.arrays
-    np.add.at(load, system.contact_wire.z_dofs[point.element[0]], point.shape[0] * started.force0)
+    for one in started:
+        point = one.arrays
+        if point.element[0] >= 0:
+            np.add.at(load, system.contact_wire.z_dofs[point.element[0]], point.shape[0] * one.force0)
     return load
 
 

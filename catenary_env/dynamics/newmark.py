@@ -3,7 +3,7 @@ compiled update, and the passage's output record (docs/model.md, 'Time integrati
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -124,9 +124,20 @@ def advance(u, v, acc, x, y, b, cf):  # noqa: ANN001, ANN201 - compilable
         y[i] = cf.g1 * u_new + cf.g2 * v_new + cf.g3 * acc_new
 
 
+class PantographTrace(NamedTuple):
+    """One pantograph's histories in a passage (see :class:`Trajectory`): position (m), raw contact force
+    (N), head height and contact-wire uplift under it (m), each (n,)."""
+
+    position: np.ndarray
+    contact_force: np.ndarray
+    head_height: np.ndarray
+    wire_uplift: np.ndarray
+
+
 @dataclass(frozen=True)
 class Trajectory:
-    """Time histories of a pantograph passage.
+    """Time histories of a pantograph passage; with several pantographs, the single fields are the first
+    (leading) pantograph's and :attr:`pantographs` has each one's.
 
     Attributes
     ----------
@@ -150,6 +161,8 @@ class Trajectory:
         Time steps with at least one slack dropper.
     unresolved_steps : int
         Time steps whose contact / slack state did not settle within the iteration limit.
+    pantographs : tuple of PantographTrace
+        Every pantograph's histories, the leading one first (docs/model.md, 'Several pantographs').
     """
 
     time: np.ndarray
@@ -163,6 +176,18 @@ class Trajectory:
     dropper_force_max: np.ndarray
     slack_steps: int
     unresolved_steps: int
+    pantographs: tuple[PantographTrace, ...] = ()
+
+    def of_pantograph(self, index: int) -> Trajectory:
+        """The passage as pantograph ``index`` saw it: its histories in the single fields."""
+        trace = self.pantographs[index]
+        return replace(
+            self,
+            position=trace.position,
+            contact_force=trace.contact_force,
+            head_height=trace.head_height,
+            wire_uplift=trace.wire_uplift,
+        )
 
 
 def passage_positions(

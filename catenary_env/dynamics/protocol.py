@@ -5,8 +5,9 @@ A dynamic model is two steps, ``prepare(system, fidelity) -> Prepared`` (the des
 design and time step) and ``run(prepared, passage) -> Trajectory``; the models are chosen by name from one
 table, :data:`catenary_env.dynamics.models.DYNAMIC_MODELS`. A :class:`Passage` names the train: its speed
 and its contact points (pantographs), each with its own pantograph and frame force, and how to run it (the
-time loop's backend, a stop, a progress callback). The loops take one contact point for now
-(:func:`single_contact_point`).
+time loop's backend, a stop, a progress callback). The exact model's straightforward loop (its oracle) takes
+one contact point (:func:`single_contact_point`), the other loops any number (docs/model.md, 'Several
+pantographs').
 """
 
 from __future__ import annotations
@@ -34,7 +35,9 @@ class ContactPoint:
         The static force on its frame, N (:func:`~catenary_env.dynamics.pantograph.frame_force` of the
         uplift force).
     offset : float
-        Its distance behind the train's first pantograph, m (0 for the first).
+        Its distance behind the train's first pantograph, m (0 for the first). The first pantograph runs
+        from the section's start to its end, the others enter the section behind it (docs/model.md,
+        'Several pantographs').
     """
 
     pantograph: PantographDefinition
@@ -73,8 +76,12 @@ class Passage:
             raise ValueError(f"passage.speed = {self.speed!r}: must be a finite number > 0 m/s")
         if not self.contact_points:
             raise ValueError("passage.contact_points: at least one pantograph")
-        if self.contact_points[0].offset != 0.0 or any(p.offset < 0.0 for p in self.contact_points):
-            raise ValueError("passage.contact_points: offsets must be >= 0 m, the first pantograph's 0")
+        offsets = [p.offset for p in self.contact_points]
+        if offsets[0] != 0.0 or any(not (b >= a) for a, b in zip(offsets, offsets[1:], strict=False)):
+            raise ValueError(
+                f"passage.contact_points: offsets {offsets} m: the first pantograph's 0, then in order "
+                "behind it"
+            )
         if self.n_steps is not None and self.n_steps < 1:
             raise ValueError(f"passage.n_steps = {self.n_steps!r}: must be >= 1")
 
@@ -106,10 +113,10 @@ class DynamicModel(NamedTuple):
 
 
 def single_contact_point(passage: Passage) -> ContactPoint:
-    """The passage's only pantograph; the loops take one for now."""
+    """The passage's only pantograph, for the loop that takes one (the exact model's oracle)."""
     if len(passage.contact_points) != 1:
         raise ValueError(
-            f"passage.contact_points: {len(passage.contact_points)} pantographs; the passage loops take one"
+            f"passage.contact_points: {len(passage.contact_points)} pantographs; this loop takes one"
         )
     return passage.contact_points[0]
 

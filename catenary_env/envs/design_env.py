@@ -19,10 +19,11 @@ from ..calibration_cache import quiet_calibrations
 from ..model.buildability import BuildabilityLimits, buildability_named
 from ..model.definition import CatenaryDefinition
 from ..model.design import Design, check_speed, physical_warnings
-from ..pipeline import CONSTRAINTS, Evaluation, Fidelity, en50367_mean_force
+from ..pipeline import CONSTRAINTS, Evaluation, Fidelity, analysis_window, en50367_mean_force
 from ..problems import DesignProblem, get_problem, resolve_fidelity
 from ..problems.speeds import SpeedsEvaluation, evaluate_over_speeds
 from ..problems.tolerance import RobustObjective
+from ..train import SINGLE, Train
 from .vector_options import VECTOR_KWARGS
 
 OBJECTIVES = ("sigma", "mean_sigma_over_speeds", "worst_sigma_over_speeds", "robust")
@@ -125,8 +126,9 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     `catenary_env.pipeline.CONSTRAINTS` by name: the largest dropper compression in N, the largest
     dropper-length shortfall in m and the contact-loss share in %; feasible when all are <= 0; a value not
     computed is absent, e.g. the contact loss of a design that failed the static check; arrays over the speeds
-    with a multi-speed objective, NaN where not computed), `dropper_lengths` (m) and `dropper_forces` (N) of a
-    central span,
+    with a multi-speed objective, NaN where not computed), `pantograph_statistics` (a dict of those statistics
+    per pantograph, the leading one first; per speed with a multi-speed objective), `dropper_lengths` (m) and
+    `dropper_forces` (N) of a central span,
     `wall_time` (s, of the simulations behind the result) and `clipped` (bool). With a multi-speed
     objective, `speed_kmh`, the statistics and `uplift_force` are arrays over `speeds_kmh`; a design is
     not simulated at the speeds after the first at which it is infeasible (the statistics are then absent,
@@ -165,6 +167,9 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
       the first step) with its statistics.
     - `vector_kwargs`: registered for `gymnasium.make_vec` (same-step autoreset), which reads it;
       `gymnasium.make` passes it on, and the env refuses any other value.
+    - `train=SINGLE`: a :class:`~catenary_env.train.Train`, pantographs behind the leading one and which
+      of them the objective's σ is (`"leading"`, `"trailing"`, `"worst"`, `"mean"`); feasibility covers
+      every pantograph (docs/model.md, 'Several pantographs'). Default: one pantograph.
 
     ```python
     >>> import gymnasium as gym
@@ -198,6 +203,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         vector_kwargs: dict[str, Any] | None = None,
         buildability: str | BuildabilityLimits | None = None,
         robust: RobustObjective | None = None,
+        train: Train = SINGLE,
     ) -> None:
         if vector_kwargs is not None and vector_kwargs != VECTOR_KWARGS:
             raise ValueError(
@@ -206,6 +212,11 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             )
         self.problem: DesignProblem = _with_options(get_problem(problem), objective, buildability, robust)
         self.fidelity: Fidelity = resolve_fidelity(fidelity, n_spans)
+        if not isinstance(train, Train):
+            raise ValueError(f"train = {train!r}: a catenary_env.train.Train")
+        catenary = self.problem.catenary_definition
+        train.check(catenary, self.fidelity.n_spans, analysis_window(catenary, self.fidelity)[1])
+        self.train = train
         self.objective = objective
         self.normalize_reward = bool(normalize_reward)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -295,7 +306,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         if key in self._memo:
             self._memo.move_to_end(key)
             return self._memo[key]
-        evaluation = self.problem.evaluate(x, speed, self.fidelity)
+        evaluation = self.problem.evaluate(x, speed, self.fidelity, train=self.train)
         self.evaluation_count += 1
         self._memo[key] = evaluation
         if len(self._memo) > MEMO_SIZE:
@@ -312,7 +323,8 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     def _reference_objective(self) -> float:
         reference = evaluate_over_speeds(
-            functools.partial(self.problem.reference_evaluation, fidelity=self.fidelity), self._speeds
+            functools.partial(self.problem.reference_evaluation, fidelity=self.fidelity, train=self.train),
+            self._speeds,
         )
         sigma = reference.sigma(self.objective == "worst_sigma_over_speeds")
         if sigma is None:
@@ -355,6 +367,8 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             passed = [a.passed for a in acceptance if a is not None]
             info["acceptance_passed"] = passed[0] if single else np.array(passed)
         info["constraints"] = _constraint_info(evaluations, len(self._speeds))
+        per_pantograph = [tuple(s.as_dict() for s in e.pantograph_statistics) for e in evaluations]
+        info["pantograph_statistics"] = per_pantograph[0] if single else tuple(per_pantograph)
         info["dropper_lengths"] = tuple(evaluations[0].dropper_lengths)
         info["dropper_forces"] = tuple(evaluations[0].dropper_forces)
         info["wall_time"] = result.wall_time

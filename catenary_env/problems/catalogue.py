@@ -17,6 +17,7 @@ import numpy as np
 from ..errors import UnknownNameError
 from ..pipeline import Evaluation, Fidelity
 from ..registry import Registry
+from ..train import SINGLE, Train
 from .design_problem import DesignProblem
 from .grid import HEIGHT_STEP, POSITION_STEP
 
@@ -54,13 +55,15 @@ def evaluate_problem(
     speed_kmh: float,
     fidelity: str | Fidelity,
     uplift_force: float | None = None,
+    train: Train = SINGLE,
 ) -> Evaluation:
     """:meth:`DesignProblem.evaluate` of a registered problem, as a picklable function for process pools.
 
     Each worker process calibrates the uplift force once per catenary, speed and fidelity unless
     ``uplift_force`` (N) is given: pass :meth:`DesignProblem.uplift_force` from the parent to spare it.
+    ``train``: the pantographs behind the leading one and the objective's (default one pantograph).
     """
-    return get_problem(name).evaluate(x, speed_kmh, fidelity, uplift_force=uplift_force)
+    return get_problem(name).evaluate(x, speed_kmh, fidelity, uplift_force=uplift_force, train=train)
 
 
 # -- the eight problems (docs/problems.md, 'The eight problems') ---------------------------------------

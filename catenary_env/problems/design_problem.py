@@ -49,6 +49,7 @@ from ..pipeline import (
     check_section_deviations,
     check_uplift,
 )
+from ..train import SINGLE, Train
 from .best_known import BestKnown, best_known_table
 from .grid import DesignGrid
 from .reference import calibrated_uplift, preset_catenary, preset_pantograph, reference_evaluation
@@ -304,11 +305,12 @@ class DesignProblem:
         return model_fingerprint(self.fingerprint(), fidelities)
 
     def reference_evaluation(
-        self, speed_kmh: float = 300.0, fidelity: str | Fidelity = "study"
+        self, speed_kmh: float = 300.0, fidelity: str | Fidelity = "study", train: Train = SINGLE
     ) -> Evaluation:
-        """The reference design's evaluation at a speed (cached in this process)."""
+        """The reference design's evaluation at a speed (cached in this process), with the ``train``'s
+        pantographs behind the leading one."""
         return reference_evaluation(
-            self.catenary, self.reference_design(), float(speed_kmh), resolve_fidelity(fidelity)
+            self.catenary, self.reference_design(), float(speed_kmh), resolve_fidelity(fidelity), train
         )
 
     def evaluate(
@@ -318,6 +320,7 @@ class DesignProblem:
         fidelity: str | Fidelity = "study",
         uplift_force: float | None = None,
         deviations: SectionDeviations | None = None,
+        train: Train = SINGLE,
     ) -> Evaluation:
         """Simulate the design of ``x`` at a speed, under the problem's :attr:`buildability` limits; with
         :attr:`robust`, the robust objective's evaluation (docs/acceptance.md).
@@ -335,6 +338,10 @@ class DesignProblem:
             worker processes their own calibration).
         deviations : SectionDeviations, optional
             Installation deviations of every span (not with :attr:`robust`, which draws its own).
+        train : Train
+            Pantographs behind the leading one (with the leading one's uplift force unless they set their
+            own) and the objective's pantograph(s), :attr:`Evaluation.sigma` (docs/model.md, 'Several
+            pantographs'); default one pantograph.
 
         Returns
         -------
@@ -372,8 +379,9 @@ class DesignProblem:
         pantograph = self.pantograph_definition
         check_uplift(pantograph, force)
         check_fidelity(catenary, resolved)
+        train.check(catenary, resolved.n_spans, pipeline.analysis_window(catenary, resolved)[1])
         return pipeline.evaluate_unchecked(
-            catenary, pantograph, design, speed, resolved, force, self.buildability, deviations
+            catenary, pantograph, design, speed, resolved, force, self.buildability, deviations, train
         )
 
     def evaluate_tolerances(

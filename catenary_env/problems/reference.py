@@ -17,6 +17,7 @@ from ..model.definition import CatenaryDefinition, PantographDefinition
 from ..model.design import Design, check_speed
 from ..model.presets import load_catenary, load_pantograph
 from ..pipeline import Evaluation, Fidelity
+from ..train import SINGLE, Train
 
 __all__ = [
     "calibrated_uplift",
@@ -62,8 +63,9 @@ def calibrated_uplift(catenary_name: str, reference: Design, speed_kmh: float, f
 
 @functools.lru_cache(maxsize=256)
 def reference_evaluation(
-    catenary_name: str, reference: Design, speed_kmh: float, fidelity: Fidelity
+    catenary_name: str, reference: Design, speed_kmh: float, fidelity: Fidelity, train: Train = SINGLE
 ) -> Evaluation:
+    """The reference design's evaluation, with the ``train``'s pantographs behind the calibrated one."""
     catenary = preset_catenary(catenary_name)
     force = calibrated_uplift(catenary_name, reference, speed_kmh, fidelity)
     return pipeline.evaluate(
@@ -73,4 +75,5 @@ def reference_evaluation(
         speed_kmh / 3.6,
         fidelity,
         uplift_force=force,
+        train=train,
     )

@@ -64,10 +64,10 @@ class SpeedsEvaluation:
 
     def sigma(self, worst: bool = False) -> float | None:
         """σ of the contact force over the speeds, N: their mean (``worst``: their largest); None when the
-        design is infeasible."""
+        design is infeasible. Each speed's σ is its evaluation's objective σ (:attr:`Evaluation.sigma`)."""
         if not self.feasible:
             return None
-        sigmas = [e.statistics.std for e in self.evaluations if e.statistics is not None]
+        sigmas = [e.sigma for e in self.evaluations if e.statistics is not None]
         return float(np.max(sigmas) if worst else np.mean(sigmas))
 
 

@@ -41,6 +41,10 @@ STUDIES = {
         "tolerance",
         "σ under installation tolerances, the design studies under buildability limits, robust GA",
     ),
+    "pantographs": Study(
+        "pantographs",
+        "two pantographs 200 m apart: the design studies' optima, a GA for the worse pantograph",
+    ),
 }
 
 

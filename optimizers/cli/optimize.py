@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from catenary_env.cli.exits import interruption
+from catenary_env.cli.options import add_train_arguments, train_of
 from catenary_env.cli.paths import check_output_path
 from catenary_env.cli.progress import LOG_INTERVAL
 from catenary_env.errors import MissingDependency, UsageError
@@ -174,6 +175,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="when stderr is not a terminal (a log, nohup), a progress line every S seconds "
         f"(default: {LOG_INTERVAL:g})",
     )
+    add_train_arguments(parser, objective=True)
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -243,11 +245,32 @@ def _run_optimizer(args: argparse.Namespace) -> OptimizationResult:
         )
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     return optimize(
-        args.problem, args.optimizer, args.budget, args.seed, speed_kmh=args.speed, fidelity=args.fidelity,
+        _problem(args), args.optimizer, args.budget, args.seed, speed_kmh=args.speed, fidelity=args.fidelity,
         store=args.store, resume=args.resume or args.resume_or_start, start_if_none=args.resume_or_start,
         n_workers=workers, scheduler=args.scheduler,
         max_evaluations=args.max_evaluations, quiet=args.quiet, progress_interval=args.progress_every,
     )  # fmt: skip
+
+
+def _problem(args: argparse.Namespace) -> Any:
+    """The problem's name, or with ``--pantographs`` the catenary problem with its train (docs/model.md,
+    'Several pantographs')."""
+    if not args.pantographs:
+        return args.problem
+    from catenary_env.problems import get_problem
+
+    from ..catenary_adapter import catenary_problem
+
+    try:
+        leading = get_problem(args.problem).pantograph_definition
+    except KeyError:
+        raise UsageError(f"--pantographs: for the catenary design problems, not {args.problem!r}") from None
+    first, train = train_of(args, leading)
+    if first != leading:
+        raise UsageError(
+            f"--pantographs {args.pantographs}: the leading pantograph is the problem's, {leading.name}"
+        )
+    return catenary_problem(args.problem, train)
 
 
 def _run_rl(args: argparse.Namespace) -> tuple[OptimizationResult, Path | None]:

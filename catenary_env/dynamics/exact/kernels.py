@@ -188,16 +188,10 @@ def _element_responses(upper, scale, unit, first, last, zd, response_t, Wz, widt
 
 
 @njit(cache=True)
-def _known_part(
-    d, point, ps, k, h, zd, b, y, u, v, acc, rhs_p, y_known, dl_known, rate_term
-):  # pragma: no cover
-    """Pantograph without contact (y_known), the contact gap, dropper elongations and damping shares.
-
-    u_known = b + y. Returns the gap without contact force, m; fills y_known, dl_known = B u_known and
-    rate_term = β k B (a1 u₀ + a4 v₀ + a5 a₀).
-    """
+def _dropper_known(d, b, y, u, v, acc, dl_known, rate_term):  # pragma: no cover - compiled
+    """The droppers' elongations dl_known = B u_known (u_known = b + y) and damping shares rate_term =
+    β k B (a1 u₀ + a4 v₀ + a5 a₀)."""
     cf = d.coefficients
-    known_response_in_place(point, cf, ps, rhs_p, y_known)
     for q in range(dl_known.size):
         t_known = 0.0
         t_rate = 0.0
@@ -207,86 +201,130 @@ def _known_part(
             t_rate += d.b_values[p] * (cf.a1 * u[j] + cf.a4 * v[j] + cf.a5 * acc[j])
         dl_known[q] = t_known
         rate_term[q] = cf.rayleigh_beta * d.droppers.rate[q] * t_rate
-    wire = 0.0
-    for i in range(4):
-        wire += h[i] * (b[zd[i]] + y[zd[i]])
-    return y_known[y_known.size - 1] - point.wire_z[k] - wire
 
 
 @njit(cache=True)
-def _resume(u, v, acc, x, y, cf, start, element, z_dofs, response_t, Wz):  # pragma: no cover - compiled
+def _gap_known(d, point, ps, k, h, zd, b, y, rhs_p, y_known):  # pragma: no cover - compiled
+    """The pantograph without contact (y_known) and its contact gap without contact force, m."""
+    known_response_in_place(point, d.coefficients, ps, rhs_p, y_known)
+    wire = 0.0
+    for i in range(4):
+        wire += h[i] * (b[zd[i]] + y[zd[i]])
+    return y_known[ps.y.size - 1] - point.wire_z[k] - wire
+
+
+@njit(cache=True)
+def _resume(u, v, acc, x, y, cf, start, elements, z_dofs, response_t, Wz):  # pragma: no cover - compiled
     """At a call's start: x, y of the first right-hand side (later calls find them in the state) and
-    W[zd] of the current element, if any."""
+    W[zd] of each contact point's current element, if any."""
     if start:
         for i in range(u.size):
             x[i] = cf.e1 * u[i] + cf.e2 * v[i] + cf.e3 * acc[i]
             y[i] = cf.g1 * u[i] + cf.g2 * v[i] + cf.g3 * acc[i]
-    if element >= 0:
-        for i in range(4):
-            for q in range(Wz.shape[1]):
-                Wz[i, q] = response_t[q, z_dofs[element, i]]
+    for p in range(elements.shape[0]):
+        element = elements[p, ELEMENT]
+        if element >= 0:
+            for i in range(4):
+                for q in range(Wz.shape[2]):
+                    Wz[p, i, q] = response_t[q, z_dofs[element, i]]
 
 
 @njit(cache=True)
-def _contact_point(d, s, point, k, unit, Wz, g_dc, width):  # pragma: no cover - compiled
-    """The contact point at step k: its element's unit responses (when it enters a new one) and its
-    compliance h P[zd] h + y*_head; fills its coupling to the droppers g = W[zd]ᵀ h."""
+def _contact_point(d, slots, point, k, unit, Wz, g_dc, width):  # pragma: no cover - compiled
+    """The contact point at step k (on the section): its element's unit responses (when it enters a new
+    one; ``slots`` its ExactState.element row); fills its coupling to the droppers g = W[zd]ᵀ h."""
     e = point.element[k]
     zd = d.z_dofs[e]
-    if e != s.element[ELEMENT]:  # the unit responses of the new contact-wire element, P = K̂⁻¹ E, and W[zd]
-        s.element[FIRST_ROW], s.element[LAST_ROW] = _element_responses(
+    if e != slots[ELEMENT]:  # the unit responses of the new contact-wire element, P = K̂⁻¹ E, and W[zd]
+        slots[FIRST_ROW], slots[LAST_ROW] = _element_responses(
             d.upper,
             d.scale,
             unit,
-            s.element[FIRST_ROW],
-            s.element[LAST_ROW],
+            slots[FIRST_ROW],
+            slots[LAST_ROW],
             zd,
             d.dropper_response_t,
             Wz,
             width,
         )
-        s.element[ELEMENT] = e
+        slots[ELEMENT] = e
     h = point.shape[k]
-    c_cc = point.y_star[point.y_star.size - 1]
-    for i in range(4):
-        for c in range(4):
-            c_cc += h[i] * unit[zd[i], c] * h[c]
     for q in range(g_dc.size):
         g_dc[q] = Wz[0, q] * h[0] + Wz[1, q] * h[1] + Wz[2, q] * h[2] + Wz[3, q] * h[3]
-    return c_cc
 
 
 @njit(cache=True)
-def run_steps(d, points, s, first, stop, width):  # pragma: no cover - compiled
+def _compliance(d, points, ps, k, unit, c_cc, gap_known):  # pragma: no cover - compiled
+    """The contact points' one-step compliances c_cc (P, P), m/N: h_i P_j[zd_i] h_j, plus the head's own on
+    the diagonal (a unit response is zero outside its rows). A point off the section gets a negative gap
+    and no coupling, so that it stays out of contact."""
+    n_c = len(points)
+    for i in range(n_c):
+        for j in range(n_c):
+            c_cc[i, j] = 0.0
+        if points[i].element[k] < 0:
+            gap_known[i] = -1.0
+            c_cc[i, i] = 1.0
+            continue
+        h = points[i].shape[k]
+        zd = d.z_dofs[points[i].element[k]]
+        c_cc[i, i] = points[i].y_star[ps[i].y.size - 1]
+        for j in range(n_c):
+            if points[j].element[k] < 0:
+                continue
+            hj = points[j].shape[k]
+            acc = c_cc[i, j]
+            for r in range(4):
+                for c in range(4):
+                    acc += h[r] * unit[j, zd[r], c] * hj[c]
+            c_cc[i, j] = acc
+
+
+@njit(cache=True)
+def run_steps(d, points, s, first, stop, width):  # pragma: no cover - compiled  # noqa: C901
     """Steps ``first`` to ``stop - 1`` of the passage (as the numpy loop), updating ``s`` in place.
 
-    ``points`` holds the contact points' arrays (one for now), ``s`` is an ExactState.
+    ``points`` holds the contact points' arrays, ``s`` is an ExactState.
     """
-    point = points[0]
-    ps = s.pantograph
+    ps = s.pantographs
+    n_c = len(points)
     n_drop = d.droppers.force.size
-    head = point.y_star.size - 1
+    p_max = 0
+    for i in range(n_c):
+        p_max = max(p_max, ps[i].y.size)
     cf = d.coefficients
     u, v, acc, x, y, b, unit = s.u, s.v, s.a, s.x, s.y, s.work, s.unit
-    Wz = np.zeros((4, n_drop))
-    g_dc = np.zeros(n_drop)
+    Wz = np.zeros((n_c, 4, n_drop))
+    g_dc = np.zeros((n_c, n_drop))
+    c_cc = np.zeros((n_c, n_c))
+    gap_known = np.zeros(n_c)
     dl_known = np.zeros(n_drop)
     rate_term = np.zeros(n_drop)
-    work = settle_workspace(n_drop)
-    lam, idx, elastic = work[2], work[3], work[4]
-    y_known = np.zeros(head + 1)
-    rhs_p = np.zeros(head + 1)
-    contact = ps.contact[0] != 0
-    _resume(u, v, acc, x, y, cf, first == 1, s.element[ELEMENT], d.z_dofs, d.dropper_response_t, Wz)
+    work = settle_workspace(n_c, n_drop)
+    lam, idx, elastic, f = work[2], work[3], work[4], work[6]
+    y_known = np.zeros((n_c, p_max))
+    rhs_p = np.zeros(p_max)
+    contact = np.zeros(n_c, dtype=np.bool_)
+    for i in range(n_c):
+        contact[i] = ps[i].contact[0] != 0
+    _resume(u, v, acc, x, y, cf, first == 1, s.element, d.z_dofs, d.dropper_response_t, Wz)
 
     for k in range(first, stop):
         symmetric_product(d.m_ptr, d.m_offset, d.m_values, x, b, width)  # u_known = K̂⁻¹ M x + y
         solve(d.upper, d.lower, d.scale, b, s.sweep, width)
-        c_cc = _contact_point(d, s, point, k, unit, Wz, g_dc, width)
-        h = point.shape[k]
-        zd = d.z_dofs[point.element[k]]
-        gap_known = _known_part(d, point, ps, k, h, zd, b, y, u, v, acc, rhs_p, y_known, dl_known, rate_term)
-        contact, f, m, resolved = settle_in_place(
+        for i in range(n_c):
+            for q in range(n_drop):
+                g_dc[i, q] = 0.0
+            if points[i].element[k] >= 0:
+                _contact_point(d, s.element[i], points[i], k, unit[i], Wz[i], g_dc[i], width)
+        _compliance(d, points, ps, k, unit, c_cc, gap_known)
+        _dropper_known(d, b, y, u, v, acc, dl_known, rate_term)
+        for i in range(n_c):
+            if points[i].element[k] >= 0:
+                h = points[i].shape[k]
+                zd = d.z_dofs[points[i].element[k]]
+                gap_known[i] = _gap_known(d, points[i], ps[i], k, h, zd, b, y, rhs_p, y_known[i])
+        m, resolved = settle_in_place(
             contact,
             s.slack,
             gap_known,
@@ -299,19 +337,37 @@ def run_steps(d, points, s, first, stop, width):  # pragma: no cover - compiled
             d.dropper_flexibility,
             work,
         )
-        # u₁ = u_known + u*_c f + Σ W_d λ_d (with u_known = b + y), over the rows where these
+        # u₁ = u_known + Σ u*_c f + Σ W_d λ_d (with u_known = b + y), over the rows where these
         # responses are not negligible.
-        p0, p1, p2, p3 = f * h[0], f * h[1], f * h[2], f * h[3]
-        for i in range(s.element[FIRST_ROW], s.element[LAST_ROW] + 1):
-            b[i] += unit[i, 0] * p0 + unit[i, 1] * p1 + unit[i, 2] * p2 + unit[i, 3] * p3
+        for j in range(n_c):
+            if points[j].element[k] < 0:
+                continue
+            h = points[j].shape[k]
+            uj = unit[j]
+            p0, p1, p2, p3 = f[j] * h[0], f[j] * h[1], f[j] * h[2], f[j] * h[3]
+            for i in range(s.element[j, FIRST_ROW], s.element[j, LAST_ROW] + 1):
+                b[i] += uj[i, 0] * p0 + uj[i, 1] * p1 + uj[i, 2] * p2 + uj[i, 3] * p3
         for q in range(m):
             for i in range(d.dropper_window[idx[q], 0], d.dropper_window[idx[q], 1] + 1):
                 b[i] += d.dropper_response_t[idx[q], i] * lam[q]
         advance(u, v, acc, x, y, b, cf)
-        advance_pantograph_in_place(point, cf, ps, y_known, f)
-
-        wire_uplift = h[0] * u[zd[0]] + h[1] * u[zd[1]] + h[2] * u[zd[2]] + h[3] * u[zd[3]]
-        record_in_place(s.history, k, f, ps.y[head], wire_uplift, elastic, s.slack, m > 0, resolved)
+        for j in range(n_c):
+            point = points[j]
+            if point.element[k] < 0:
+                s.history.force[j, k] = 0.0
+                s.history.head_height[j, k] = ps[j].y[ps[j].y.size - 1]
+                s.history.wire_uplift[j, k] = 0.0
+                continue
+            advance_pantograph_in_place(point, cf, ps[j], y_known[j], f[j])
+            h = point.shape[k]
+            zd = d.z_dofs[point.element[k]]
+            s.history.force[j, k] = f[j]
+            s.history.head_height[j, k] = ps[j].y[ps[j].y.size - 1]
+            s.history.wire_uplift[j, k] = (
+                h[0] * u[zd[0]] + h[1] * u[zd[1]] + h[2] * u[zd[2]] + h[3] * u[zd[3]]
+            )
+        record_in_place(s.history, k, elastic, s.slack, m > 0, resolved)
         for i in range(d.support_z.size):
             s.history.support_uplift[k, i] = u[d.support_z[i]]
-    ps.contact[0] = 1 if contact else 0
+    for i in range(n_c):
+        ps[i].contact[0] = 1 if contact[i] else 0

@@ -23,45 +23,66 @@ from .preparation import PreparedExact
 from .state import ExactState
 
 
-def run_steps(
+def run_steps(  # noqa: C901
     prepared: PreparedExact, points: tuple[ContactPointArrays, ...], s: ExactState, first: int, stop: int
 ) -> None:
     """Steps ``first`` to ``stop - 1`` of the passage, updating the ExactState ``s`` in place."""
-    (point,) = points
     system, nm, cf = prepared.system, prepared.constants, prepared.coefficients
     M, K, B = system.mass, system.stiffness, system.dropper_elongation
     W, G = prepared.dropper_response, prepared.dropper_flexibility
-    head = point.y_star.size - 1
+    n_c = len(points)
+    heads = [point.y_star.size - 1 for point in points]
     c1, c2, c3 = cf.a0 + system.alpha * cf.a1, cf.a2 + system.alpha * cf.a4, cf.a3 + system.alpha * cf.a5
     d1, d2, d3 = cf.rayleigh_beta * cf.a1, cf.rayleigh_beta * cf.a4, cf.rayleigh_beta * cf.a5
-    contact, slack = bool(s.pantograph.contact[0]), s.slack.copy()
-    current_element = -1
+    contact = np.array([bool(ps.contact[0]) for ps in s.pantographs])
+    slack = s.slack.copy()
+    current = [-1] * n_c
+    responses: list = [None] * n_c
     for k in range(first, stop):
         u, v, a = s.u, s.v, s.a
         u_known = prepared.factor.solve(M @ (c1 * u + c2 * v + c3 * a) + K @ (d1 * u + d2 * v + d3 * a))
-        if point.element[k] != current_element:
-            current_element = point.element[k]
-            zd, P, Pzz, Wz = _element_responses(prepared, current_element)
-        h = point.shape[k]
-        c_cc = h @ Pzz @ h + point.y_star[head]
-        g_dc = Wz.T @ h
-        y_known = known_response(point, cf, s.pantograph)
-        gap_known = float(y_known[head] - point.wire_z[k] - h @ u_known[zd])
+        on = [i for i, point in enumerate(points) if point.element[k] >= 0]
+        for i in on:
+            if points[i].element[k] != current[i]:
+                current[i] = points[i].element[k]
+                responses[i] = _element_responses(prepared, current[i])
+        gap_known = np.full(n_c, -1.0)  # a point off the section stays out of contact
+        c_cc = np.eye(n_c)
+        g_dc = np.zeros((n_c, B.shape[0]))
+        y_known = [None] * n_c
+        for i in on:
+            point, h = points[i], points[i].shape[k]
+            zd, P, Pzz, Wz = responses[i]
+            c_cc[i, i] = h @ Pzz @ h + point.y_star[heads[i]]
+            for j in on:
+                if j != i:
+                    c_cc[i, j] = h @ responses[j][1][zd] @ points[j].shape[k]
+            g_dc[i] = Wz.T @ h
+            y_known[i] = known_response(point, cf, s.pantographs[i])
+            gap_known[i] = float(y_known[i][heads[i]] - point.wire_z[k] - h @ u_known[zd])
         rate_term = cf.rayleigh_beta * prepared.droppers.rate * (B @ (cf.a1 * u + cf.a4 * v + cf.a5 * a))
         step = settle(
             contact, slack, gap_known, c_cc, g_dc, B @ u_known, rate_term, cf.contact_stiffness,
             prepared.droppers, G,
         )  # fmt: skip
         contact, slack, f, idx, lam, elastic = step[:6]
-        u_new = u_known + (P @ h) * f + W[:, idx] @ lam
+        u_new = u_known
+        for i in on:
+            u_new = u_new + (responses[i][1] @ points[i].shape[k]) * f[i]
+        u_new = u_new + W[:, idx] @ lam
         v_new, a_new = nm.update(u, v, a, u_new)
         s.u[:], s.v[:], s.a[:] = u_new, v_new, a_new
-        advance_pantograph(point, cf, s.pantograph, y_known, f)
+        uplift = np.zeros(n_c)
+        for i in on:
+            advance_pantograph(points[i], cf, s.pantographs[i], y_known[i], f[i])
+            uplift[i] = points[i].shape[k] @ s.u[responses[i][0]]
+        heights = np.array([ps.y[head] for ps, head in zip(s.pantographs, heads, strict=True)])
         record(
-            s.history, k, f, s.pantograph.y[head], h @ s.u[zd], s.u[system.support_z], elastic, slack,
-            idx.size > 0, step.resolved,
+            s.history, k, f, heights, uplift, s.u[system.support_z], elastic, slack, idx.size > 0,
+            step.resolved,
         )  # fmt: skip
-    s.pantograph.contact[0] = int(contact)
+    for ps, touching in zip(s.pantographs, contact, strict=True):
+        ps.contact[0] = int(touching)
     s.slack[:] = slack
 
 

@@ -68,7 +68,7 @@ def run_steps(
 
     steps = element.size
     report_every = max(1, steps // 100)
-    contact, slack = started.force0 > 0.0, np.zeros(N0.size, dtype=bool)
+    contact, slack = np.array([started.force0 > 0.0]), np.zeros(N0.size, dtype=bool)
     for k in range(1, steps):
         if progress is not None and k % report_every == 0:
             progress(k / steps)
@@ -83,7 +83,7 @@ def run_steps(
         for iteration in range(MAX_ACTIVE_SET_ITERATIONS):
             matrix = base.copy()
             r = rhs.copy()
-            if contact:
+            if contact[0]:
                 # f = kh (y_head - wire_z - N u), acting up on the wire and down on the head.
                 on = np.flatnonzero(N_row)
                 outer = np.outer(N_row[on], N_row[on]).ravel()
@@ -100,19 +100,19 @@ def run_steps(
             gap = -(N_row @ U_new) - wire_z[k]
             elongation = B @ U_new[:n]
             elastic = N0 + rate * ((1.0 + beta_slack * nm.a1) * elongation - beta_slack * velocity_part)
-            new_contact, new_slack = bool(gap > 0.0), elastic < 0.0
-            if new_contact == contact and np.array_equal(new_slack, slack):
+            new_contact, new_slack = np.array([gap > 0.0]), elastic < 0.0
+            if new_contact[0] == contact[0] and np.array_equal(new_slack, slack):
                 resolved = True
                 break
             contact, slack = switch_states(
-                contact, slack, new_contact, new_slack, kh * gap, elastic, iteration
+                contact, slack, new_contact, new_slack, np.array([kh * gap]), elastic, iteration
             )
         V, A = nm.update(U, V, A, U_new)
         U = U_new
         record(
             history,
             k,
-            kh * gap if contact else 0.0,
+            kh * gap if contact[0] else 0.0,
             U[n + head],
             shape[k] @ U[system.contact_wire.z_dofs[element[k]]],
             U[system.support_z],

@@ -15,9 +15,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from types import ModuleType
 
+import numpy as np
 import scipy.sparse.linalg as spla
 
-from ..contact_point import StartedPoint, initial_load, start_contact_point
+from ..contact_point import StartedPoint, initial_load, start_contact_point, start_train
 from ..history import PassageHistory, start_history, trajectory
 from ..newmark import Trajectory
 from ..protocol import ContactPoint, Passage, choose_backend, run_in_chunks, single_contact_point
@@ -57,35 +58,46 @@ def run(prepared: PreparedExact, passage: Passage) -> Trajectory:
             f"backend = {backend!r}: integrates C = alpha M + beta K with slack droppers dropping their "
             "whole force only; this system needs backend = 'oracle'"
         )
-    point = single_contact_point(passage)
-    started = start_contact_point(system, point, prepared.constants, passage.speed, passage.n_steps)
+    if backend == "oracle":
+        point = single_contact_point(passage)
+        started = (start_contact_point(system, point, prepared.constants, passage.speed, passage.n_steps),)
+    else:
+        point = passage.contact_points[0]
+        started = start_train(system, passage, prepared.constants)
     history = start_history(
-        started.time.size, system.support_z.size, system.dropper_force, started.force0, started.state.y[-1]
+        started[0].time.size,
+        system.support_z.size,
+        system.dropper_force,
+        np.array([one.force0 for one in started]),
+        np.array([one.state.y[-1] for one in started]),
     )
     BACKENDS[backend](prepared, point, started, history, passage.progress)
-    return trajectory(history, started.time, started.position, system.static.layout.support_x)
+    positions = tuple(one.position for one in started)
+    return trajectory(history, started[0].time, positions, system.static.layout.support_x)
 
 
 def _run_numpy(
     prepared: PreparedExact,
     point: ContactPoint,
-    started: StartedPoint,
+    started: tuple[StartedPoint, ...],
     history: PassageHistory,
     progress: Callable[[float], None] | None,
 ) -> None:
     system = prepared.system
     acceleration = spla.spsolve(system.mass.tocsc(), initial_load(system, started))
     state = start_state(acceleration, 0, started, history)
-    points = (started.arrays,)
+    points = tuple(one.arrays for one in started)
     run_in_chunks(
-        lambda first, stop: loop.run_steps(prepared, points, state, first, stop), started.time.size, progress
+        lambda first, stop: loop.run_steps(prepared, points, state, first, stop),
+        started[0].time.size,
+        progress,
     )
 
 
 def _run_compiled(
     prepared: PreparedExact,
     point: ContactPoint,
-    started: StartedPoint,
+    started: tuple[StartedPoint, ...],
     history: PassageHistory,
     progress: Callable[[float], None] | None,
 ) -> None:
@@ -97,10 +109,10 @@ def _run_compiled(
     data, width, order = prepared.compiled
     acceleration = spla.spsolve(system.mass.tocsc(), initial_load(system, started))
     state = start_state(acceleration[order], len(width), started, history)
-    points = (started.arrays,)
+    points = tuple(one.arrays for one in started)
     run_in_chunks(
         lambda first, stop: kernels.run_steps(data, points, state, first, stop, width),
-        started.time.size,
+        started[0].time.size,
         progress,
     )
 
@@ -108,11 +120,11 @@ def _run_compiled(
 def _run_oracle(
     prepared: PreparedExact,
     point: ContactPoint,
-    started: StartedPoint,
+    started: tuple[StartedPoint, ...],
     history: PassageHistory,
     progress: Callable[[float], None] | None,
 ) -> None:
-    oracle.run_steps(prepared, point, started, history, progress)
+    oracle.run_steps(prepared, point, started[0], history, progress)
 
 
 BACKENDS = {"numba": _run_compiled, "numpy": _run_numpy, "oracle": _run_oracle}

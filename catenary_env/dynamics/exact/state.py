@@ -25,13 +25,14 @@ class ExactState(NamedTuple):
         Compiled loop: the right-hand side M x, then K̂⁻¹ M x, then u₁ - y.
     sweep : ndarray (n + w,)
         Compiled loop: the forward sweep's unknowns, in reverse order.
-    unit : ndarray (n + w, 4)
-        Compiled loop: unit responses of the current contact-wire element, non-zero in rows
-        ``element[FIRST_ROW]`` to ``element[LAST_ROW]`` (:mod:`.kernels`).
-    element : ndarray (3,) of int
-        Compiled loop: the current contact-wire element (-1: none yet) and those rows.
+    unit : ndarray (P, n + w, 4)
+        Compiled loop: unit responses of each contact point's current contact-wire element, non-zero in rows
+        ``element[p, FIRST_ROW]`` to ``element[p, LAST_ROW]`` (:mod:`.kernels`).
+    element : ndarray (P, 3) of int
+        Compiled loop: each contact point's current contact-wire element (-1: none yet) and those rows.
     slack : ndarray (D,) of bool
-    pantograph : PantographState
+    pantographs : tuple of PantographState
+        Each contact point's pantograph.
     history : PassageHistory
     """
 
@@ -45,12 +46,12 @@ class ExactState(NamedTuple):
     unit: np.ndarray
     element: np.ndarray
     slack: np.ndarray
-    pantograph: PantographState
+    pantographs: tuple[PantographState, ...]
     history: PassageHistory
 
 
 def start_state(
-    acceleration: np.ndarray, width: int, started: StartedPoint, history: PassageHistory
+    acceleration: np.ndarray, width: int, started: tuple[StartedPoint, ...], history: PassageHistory
 ) -> ExactState:
     """The catenary at rest with the initial ``acceleration`` (n,); ``width`` 0 for the numpy loop, which
     needs no work space."""
@@ -64,9 +65,9 @@ def start_state(
         y=np.zeros(n if width else 0),
         work=np.zeros(padded),
         sweep=np.zeros(padded),
-        unit=np.zeros((padded, 4)),
-        element=np.array([-1, 0, -1], dtype=np.int64),
+        unit=np.zeros((len(started), padded, 4)),
+        element=np.tile(np.array([-1, 0, -1], dtype=np.int64), (len(started), 1)),
         slack=np.zeros(history.dropper_min.size, dtype=np.bool_),
-        pantograph=started.state,
+        pantographs=tuple(one.state for one in started),
         history=history,
     )

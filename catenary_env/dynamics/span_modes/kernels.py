@@ -11,7 +11,9 @@ Each step:
    contact-wire element and per dropper; then every span's modes in one pass,
    x_q = D⁻¹ (e_q + F_q + M_qc (e_c - c_m x_c)), fused with the Newmark update.
 
-S and Y depend on the configuration (the span the pantograph is in); S is a banded Cholesky factor.
+S and Y depend on the configuration (the spans the pantographs are in); S is a banded Cholesky factor.
+With several pantographs each has its element's responses, and their mutual compliance goes through the
+interface (they are a span apart at least).
 
 It reads :class:`~catenary_env.dynamics.span_modes.preparation.SpanModeArrays`, the contact point's
 :class:`~catenary_env.dynamics.contact_point.ContactPointArrays` and updates a
@@ -98,12 +100,12 @@ def _element_rows(d, e, rows_q, rows_c):  # pragma: no cover - compiled
 
 
 @njit(cache=True, fastmath=FAST)
-def _element_responses(d, c, e, rows_c, p_b, comp, g_modal, g_full, mq, forces):  # pragma: no cover
+def _element_responses(d, c, slot, e, rows_c, p_b, comp, g_modal, g_full, mq, forces):  # pragma: no cover
     """A unit force at each of the element's 4 DOFs: interface response p_b (4, n_b), compliance
     (4, 4) with the residual, the droppers' elongations (4, D), of the kept modes and with the
-    residual, and mq = rows_q D⁻¹ M_qc (4, n_c). The element lies in the pantograph's span c, which
-    keeps all its modes: its interface forces F = rows_c - c_m mq act at span c's coupled DOFs,
-    whose S⁻¹ columns and droppers' responses the configuration holds."""
+    residual, and mq = rows_q D⁻¹ M_qc (4, n_c). The element lies in pantograph ``slot``'s span, which
+    keeps all its modes in configuration c: its interface forces F = rows_c - c_m mq act at that span's
+    coupled DOFs, whose S⁻¹ columns and droppers' responses the configuration holds."""
     c_m = d.coefficients.mass_factor
     s = d.element_span[e]
     t = d.span_type[s]
@@ -117,8 +119,8 @@ def _element_responses(d, c, e, rows_c, p_b, comp, g_modal, g_full, mq, forces):
     g_modal[:] = 0.0
     for r in range(4):
         for j in range(nc):
-            _axpy(d.element_interface[c, j], forces[r, j], p_b[r], p_b.shape[1])
-            _axpy(d.dropper_element_interface[c, j], forces[r, j], g_modal[r], g_modal.shape[1])
+            _axpy(d.element_interface[c, slot, j], forces[r, j], p_b[r], p_b.shape[1])
+            _axpy(d.dropper_element_interface[c, slot, j], forces[r, j], g_modal[r], g_modal.shape[1])
     for r in range(4):  # rows_q D⁻¹ rows_qᵀ + residual + (rows_c - c_m rows_q D⁻¹ M_qc) p_c
         for col in range(4):
             acc = d.element_compliance[e, r, col] + d.element_modal_compliance[e, r, col]
@@ -228,7 +230,7 @@ def _contact_point(  # pragma: no cover - compiled
         hc = h[0] * rows_c[0, j] + h[1] * rows_c[1, j] + h[2] * rows_c[2, j] + h[3] * rows_c[3, j]
         wire += hm * g_c[s_el, j] + hc * (x_b[cj] + y[n_q + cj])
     known_response_in_place(point, d.coefficients, ps, rhs_p, y_known)
-    head = y_known.size - 1
+    head = ps.y.size - 1
     gap_known = y_known[head] - point.wire_z[k] - wire
     c_cc = point.y_star[head]
     for r in range(4):
@@ -241,12 +243,38 @@ def _contact_point(  # pragma: no cover - compiled
 
 
 @njit(cache=True, fastmath=FAST)
-def run_steps(d, points, st, first, stop):  # pragma: no cover - compiled  # noqa: C901
+def _cross_compliance(d, points, k, forces, p_b, c_cc):  # pragma: no cover - compiled
+    """c_cc[i, j] (m/N) of the pantographs in different spans: the displacement under pantograph i of a unit
+    force under pantograph j, through the interface, h_i (rows_c - c_m mq)_i p_b,j h_j."""
+    n_c = len(points)
+    for i in range(n_c):
+        ei = points[i].element[k]
+        if ei < 0:
+            continue
+        hi = points[i].shape[k]
+        si = d.element_span[ei]
+        nc = d.n_coupled[d.span_type[si]]
+        for j in range(n_c):
+            if j == i or points[j].element[k] < 0:
+                continue
+            hj = points[j].shape[k]
+            acc = 0.0
+            for r in range(4):
+                for col in range(4):
+                    t = 0.0
+                    for jj in range(nc):
+                        t += forces[i, r, jj] * p_b[j, col, d.coupled[si, jj]]
+                    acc += hi[r] * t * hj[col]
+            c_cc[i, j] = acc
+
+
+@njit(cache=True, fastmath=FAST)
+def run_steps(d, points, st, configuration, first, stop):  # pragma: no cover - compiled  # noqa: C901
     """Steps ``first`` to ``stop - 1`` of the passage, updating the SpanModeState ``st`` in place.
 
-    ``points`` holds the contact points' arrays (one for now)."""
-    point = points[0]
-    ps = st.pantograph
+    ``points`` holds the contact points' arrays, ``configuration`` (steps,) each step's configuration."""
+    ps = st.pantographs
+    n_c = len(points)
     cf = d.coefficients
     g1, g2, g3 = cf.g1, cf.g2, cf.g3
     a0, a1, a2, a3, a4, a5 = cf.a0, cf.a1, cf.a2, cf.a3, cf.a4, cf.a5
@@ -255,52 +283,58 @@ def run_steps(d, points, st, first, stop):  # pragma: no cover - compiled  # noq
     n_b = d.schur_inverse_diagonal.shape[1]
     n_q = d.modal_offset[n_spans]
     n_drop = d.droppers.force.size
-    head = point.y_star.size - 1
-    n_p = head + 1
+    p_max = 0
+    for i in range(n_c):
+        p_max = max(p_max, ps[i].y.size)
     m_max = d.coupling.shape[2]
     nc_max = d.coupling.shape[1]
     width = (d.interface_rhs_rows.shape[2] - 1) // 2
     u, v, acc_s, e_vec, y = st.u, st.v, st.a, st.e, st.y
-    rows_q = np.zeros((4, m_max))
-    rows_c = np.zeros((4, nc_max))
-    p_b = np.zeros((4, n_b))
-    comp = np.zeros((4, 4))
-    g_modal = np.zeros((4, n_drop))
-    g_full = np.zeros((4, n_drop))
-    m_qc = np.zeros((4, nc_max))  # the element's rows_q D⁻¹ M_qc
-    forces = np.zeros((4, nc_max))  # its interface forces rows_c - c_m rows_q D⁻¹ M_qc
+    rows_q = np.zeros((n_c, 4, m_max))
+    rows_c = np.zeros((n_c, 4, nc_max))
+    p_b = np.zeros((n_c, 4, n_b))
+    comp = np.zeros((n_c, 4, 4))
+    g_modal = np.zeros((n_c, 4, n_drop))
+    g_full = np.zeros((n_c, 4, n_drop))
+    m_qc = np.zeros((n_c, 4, nc_max))  # each element's rows_q D⁻¹ M_qc
+    forces = np.zeros((n_c, 4, nc_max))  # its interface forces rows_c - c_m rows_q D⁻¹ M_qc
     work_b = np.zeros(n_b)
     e_pad = np.zeros(n_b + 2 * width)  # the interface's e between w zeros each side
     x_b = np.zeros(n_b)
     g_c = np.zeros((n_spans, nc_max))  # e_c - c_m x_c of each span's coupled interface DOFs
     x_c = np.zeros((n_spans, nc_max))  # x_c
     sums = np.zeros(nc_max)  # a span's sums over its coupled interface DOFs
-    g_dc = np.zeros(n_drop)
-    gm_dc = np.zeros(n_drop)
+    g_dc = np.zeros((n_c, n_drop))
+    gm_dc = np.zeros((n_c, n_drop))
+    c_cc = np.zeros((n_c, n_c))
+    gap_known = np.zeros(n_c)
     dl_known = np.zeros(n_drop)
     rate_term = np.zeros(n_drop)
-    work = settle_workspace(n_drop)
-    lam, idx, elastic = work[2], work[3], work[4]
-    y_known = np.zeros(n_p)
-    rhs_p = np.zeros(n_p)
+    work = settle_workspace(n_c, n_drop)
+    lam, idx, elastic, f = work[2], work[3], work[4], work[6]
+    y_known = np.zeros((n_c, p_max))
+    rhs_p = np.zeros(p_max)
     fq = np.zeros(m_max)  # a span's modes' right-hand side
-    h_q = np.zeros(m_max)  # h rows_q: the contact point's row over its span's modes
-    contact = ps.contact[0] != 0
-    current = -1
+    h_q = np.zeros((n_c, m_max))  # h rows_q: each contact point's row over its span's modes
+    contact = np.zeros(n_c, dtype=np.bool_)
+    current = np.full(n_c, -1, dtype=np.int64)
+    for i in range(n_c):
+        contact[i] = ps[i].contact[0] != 0
 
     for k in range(first, stop):
-        el = point.element[k]
-        c = d.element_span[el]  # the configuration: the pantograph's span
+        c = configuration[k]
         if c != st.configuration[0]:
             _configure(d, st, c)
-            current = -1
-        if el != current:
-            _element_rows(d, el, rows_q, rows_c)
-            _element_responses(d, c, el, rows_c, p_b, comp, g_modal, g_full, m_qc, forces)
-            current = el
-        h = point.shape[k]
-        s_el = d.element_span[el]
-        t_el = d.span_type[s_el]
+            for i in range(n_c):
+                current[i] = -1
+        for i in range(n_c):
+            el = points[i].element[k]
+            if el >= 0 and el != current[i]:
+                _element_rows(d, el, rows_q[i], rows_c[i])
+                _element_responses(
+                    d, c, i, el, rows_c[i], p_b[i], comp[i], g_modal[i], g_full[i], m_qc[i], forces[i]
+                )
+                current[i] = el
         flex = d.dropper_flexibility[c]
         # 1. Interface part of K̂⁻¹ M e, and the droppers' modal part of step 2, span by span.
         band = d.interface_rhs_rows[c]
@@ -332,12 +366,25 @@ def run_steps(d, points, st, first, stop):  # pragma: no cover - compiled  # noq
             acc = dl_known[q] + _dot(d.dropper_h[c, q], g_c[sd], nc) + _dot(d.dropper_c[q], x_c[sd], nc)
             dl_known[q] = acc + g1 * st.Bu[q] + g2 * st.Bv[q] + g3 * st.Ba[q]
             rate_term[q] = beta * d.droppers.rate[q] * (a1 * st.Bu[q] + a4 * st.Bv[q] + a5 * st.Ba[q])
-        gap_known, c_cc = _contact_point(
-            d, point, ps, k, c, el, rows_q, rows_c, m_qc, comp, g_full, g_modal, e_vec, y, x_b, g_c,
-            h_q, g_dc, gm_dc, rhs_p, y_known,
-        )  # fmt: skip
-        # 3. Contact force and slack droppers.
-        contact, f, n_slack, resolved = settle_in_place(
+        for i in range(n_c):
+            for j in range(n_c):
+                c_cc[i, j] = 0.0
+            el = points[i].element[k]
+            if el < 0:  # off the section: out of contact, no coupling
+                gap_known[i] = -1.0
+                c_cc[i, i] = 1.0
+                for q in range(n_drop):
+                    g_dc[i, q] = 0.0
+                    gm_dc[i, q] = 0.0
+                continue
+            gap_known[i], c_cc[i, i] = _contact_point(
+                d, points[i], ps[i], k, c, el, rows_q[i], rows_c[i], m_qc[i], comp[i], g_full[i], g_modal[i],
+                e_vec, y, x_b, g_c, h_q[i], g_dc[i], gm_dc[i], rhs_p, y_known[i],
+            )  # fmt: skip
+        if n_c > 1:
+            _cross_compliance(d, points, k, forces, p_b, c_cc)
+        # 3. Contact forces and slack droppers.
+        n_slack, resolved = settle_in_place(
             contact,
             st.slack,
             gap_known,
@@ -351,8 +398,13 @@ def run_steps(d, points, st, first, stop):  # pragma: no cover - compiled  # noq
             work,
         )
         # 4. Their interface response, then every span's modes with the Newmark update.
-        for i in range(n_b):
-            x_b[i] += f * (p_b[0, i] * h[0] + p_b[1, i] * h[1] + p_b[2, i] * h[2] + p_b[3, i] * h[3])
+        for p in range(n_c):
+            if points[p].element[k] < 0:
+                continue
+            h = points[p].shape[k]
+            pb = p_b[p]
+            for i in range(n_b):
+                x_b[i] += f[p] * (pb[0, i] * h[0] + pb[1, i] * h[1] + pb[2, i] * h[2] + pb[3, i] * h[3])
         for qq in range(n_slack):
             for i in range(n_b):
                 x_b[i] += lam[qq] * d.dropper_interface[c, idx[qq], i]
@@ -364,8 +416,10 @@ def run_steps(d, points, st, first, stop):  # pragma: no cover - compiled  # noq
             e_s = e_vec[off:end]
             for i in range(m):
                 fq[i] = e_s[i]
-            if s == s_el:
-                _axpy(h_q, f, fq, m)
+            for p in range(n_c):
+                el = points[p].element[k]
+                if el >= 0 and d.element_span[el] == s:
+                    _axpy(h_q[p], f[p], fq, m)
             for qq in range(n_slack):
                 if d.dropper_span[idx[qq]] == s:
                     _axpy(d.dropper_q_plain[idx[qq]], lam[qq], fq, m)
@@ -380,7 +434,9 @@ def run_steps(d, points, st, first, stop):  # pragma: no cover - compiled  # noq
         advance(u[n_q:], v[n_q:], acc_s[n_q:], e_vec[n_q:], y[n_q:], x_b, cf)
         mflex = d.dropper_modal_flexibility[c]
         for q in range(n_drop):
-            bu = dl_known[q] + gm_dc[q] * f
+            bu = dl_known[q]
+            for p in range(n_c):
+                bu += gm_dc[p, q] * f[p]
             for qq in range(n_slack):
                 bu += mflex[q, idx[qq]] * lam[qq]
             du = bu - st.Bu[q]
@@ -388,13 +444,29 @@ def run_steps(d, points, st, first, stop):  # pragma: no cover - compiled  # noq
             st.Bv[q] = a1 * du - a4 * st.Bv[q] - a5 * st.Ba[q]
             st.Ba[q] = ba
             st.Bu[q] = bu
-        advance_pantograph_in_place(point, cf, ps, y_known, f)
-        off = d.modal_offset[s_el]
-        upl = _dot(h_q, u[off:], d.kept[c, s_el])
-        for j in range(d.n_coupled[t_el]):
-            hc = h[0] * rows_c[0, j] + h[1] * rows_c[1, j] + h[2] * rows_c[2, j] + h[3] * rows_c[3, j]
-            upl += hc * u[n_q + d.coupled[s_el, j]]
-        record_in_place(st.history, k, f, ps.y[head], upl, elastic, st.slack, n_slack > 0, resolved)
+        for p in range(n_c):
+            head = ps[p].y.size - 1
+            el = points[p].element[k]
+            if el < 0:
+                st.history.force[p, k] = 0.0
+                st.history.head_height[p, k] = ps[p].y[head]
+                st.history.wire_uplift[p, k] = 0.0
+                continue
+            advance_pantograph_in_place(points[p], cf, ps[p], y_known[p], f[p])
+            h = points[p].shape[k]
+            s_el = d.element_span[el]
+            t_el = d.span_type[s_el]
+            off = d.modal_offset[s_el]
+            upl = _dot(h_q[p], u[off:], d.kept[c, s_el])
+            rc = rows_c[p]
+            for j in range(d.n_coupled[t_el]):
+                hc = h[0] * rc[0, j] + h[1] * rc[1, j] + h[2] * rc[2, j] + h[3] * rc[3, j]
+                upl += hc * u[n_q + d.coupled[s_el, j]]
+            st.history.force[p, k] = f[p]
+            st.history.head_height[p, k] = ps[p].y[head]
+            st.history.wire_uplift[p, k] = upl
+        record_in_place(st.history, k, elastic, st.slack, n_slack > 0, resolved)
         for i in range(d.support.size):
             st.history.support_uplift[k, i] = u[n_q + d.support[i]]
-    ps.contact[0] = 1 if contact else 0
+    for i in range(n_c):
+        ps[i].contact[0] = 1 if contact[i] else 0

@@ -23,31 +23,35 @@ from .state import SpanModeState
 
 
 def run_steps(  # noqa: C901
-    d: SpanModeArrays, points: tuple[ContactPointArrays, ...], st: SpanModeState, first: int, stop: int
+    d: SpanModeArrays,
+    points: tuple[ContactPointArrays, ...],
+    st: SpanModeState,
+    configuration: np.ndarray,
+    first: int,
+    stop: int,
 ) -> None:
     """Steps ``first`` to ``stop - 1`` of the passage, updating ``st`` in place: the compiled loop's steps in
-    numpy."""
-    (point,) = points
+    numpy. ``configuration`` (steps,) is each step's configuration."""
     cf = d.coefficients
     g1, g2, g3 = cf.g1, cf.g2, cf.g3
     a0, a1, a2, a3, a4, a5 = cf.a0, cf.a1, cf.a2, cf.a3, cf.a4, cf.a5
     kh, beta, c_m = cf.contact_stiffness, cf.rayleigh_beta, cf.mass_factor
     n_spans = d.span_type.size
     n_q = d.modal_offset[-1]
-    head = point.y_star.size - 1
+    n_c = len(points)
+    heads = [point.y_star.size - 1 for point in points]
     width = (d.interface_rhs_rows.shape[2] - 1) // 2
     N0 = d.droppers.force
-    ps = st.pantograph
-    contact = bool(ps.contact[0])
-    current = -1
+    contact = np.array([bool(ps.contact[0]) for ps in st.pantographs])
+    current = [-1] * n_c
+    element: list = [None] * n_c  # each point's element: rows_q, rows_c, p_b, comp, g_modal, g_full, forces
     u, v, acc_s, e_vec, y = st.u, st.v, st.a, st.e, st.y
     spans = [
         (s, d.span_type[s], d.modal_offset[s], d.coupled[s, : d.n_coupled[d.span_type[s]]])
         for s in range(n_spans)
     ]
     for k in range(first, stop):
-        el = point.element[k]
-        c = d.element_span[el]  # the configuration: the pantograph's span
+        c = configuration[k]
         if c != st.configuration[0]:
             for s, _, off, _ in spans:
                 drop = slice(off + d.kept[c, s], d.modal_offset[s + 1])
@@ -57,13 +61,14 @@ def run_steps(  # noqa: C901
             st.Bv[:] = _dropper_elongations(d, c, v)
             st.Ba[:] = _dropper_elongations(d, c, acc_s)
             st.configuration[0] = c
-            current = -1
-        if el != current:
-            rows_q, rows_c = _element_rows(d, el)
-            p_b, comp, g_modal, g_full = _element_responses(d, c, el, rows_q, rows_c)
-            current = el
-        h = point.shape[k]
-        s_el = d.element_span[el]
+            current = [-1] * n_c
+        on = [i for i, point in enumerate(points) if point.element[k] >= 0]
+        for i in on:
+            el = points[i].element[k]
+            if el != current[i]:
+                rows_q, rows_c = _element_rows(d, el)
+                element[i] = (rows_q, rows_c, *_element_responses(d, c, el, rows_q, rows_c))
+                current[i] = el
         kept = d.kept[c]
         # 1. Interface part of K̂⁻¹ M e.
         e_b = np.pad(e_vec[n_q:], width)
@@ -86,28 +91,45 @@ def run_steps(  # noqa: C901
             )
         dl_known += g1 * st.Bu + g2 * st.Bv + g3 * st.Ba
         rate_term = beta * d.droppers.rate * (a1 * st.Bu + a4 * st.Bv + a5 * st.Ba)
-        s, t, off, cpl = spans[s_el]
-        m = kept[s_el]
-        x_q = (e_vec[off : off + m] + g_c[s_el] @ d.coupling[t, : cpl.size, :m]) * d.inverse_diagonal[t, :m]
-        u_q = x_q + y[off : off + m]
-        u_c = x_b[cpl] + y[n_q + cpl]
-        wire = h @ (rows_q[:, :m] @ u_q + rows_c[:, : cpl.size] @ u_c)
-        y_known = known_response(point, cf, ps)
-        gap_known = y_known[head] - point.wire_z[k] - wire
-        c_cc = h @ comp @ h + point.y_star[head]
-        g_dc = g_full @ h
-        gm_dc = g_modal @ h
+        gap_known = np.full(n_c, -1.0)  # a point off the section stays out of contact
+        c_cc = np.eye(n_c)
+        g_dc = np.zeros((n_c, N0.size))
+        gm_dc = np.zeros((n_c, N0.size))
+        y_known: list = [None] * n_c
+        for i in on:
+            point, h, el = points[i], points[i].shape[k], points[i].element[k]
+            rows_q, rows_c, p_b, comp, g_modal, g_full, forces = element[i]
+            s_el = d.element_span[el]
+            s, t, off, cpl = spans[s_el]
+            m = kept[s_el]
+            x_q = (e_vec[off : off + m] + g_c[s_el] @ d.coupling[t, : cpl.size, :m]) * d.inverse_diagonal[
+                t, :m
+            ]
+            u_q = x_q + y[off : off + m]
+            u_c = x_b[cpl] + y[n_q + cpl]
+            wire = h @ (rows_q[:, :m] @ u_q + rows_c[:, : cpl.size] @ u_c)
+            y_known[i] = known_response(point, cf, st.pantographs[i])
+            gap_known[i] = y_known[i][heads[i]] - point.wire_z[k] - wire
+            c_cc[i, i] = h @ comp @ h + point.y_star[heads[i]]
+            for j in on:  # another span's pantograph: through the interface only
+                if j != i:
+                    c_cc[i, j] = h @ forces @ element[j][2][cpl] @ points[j].shape[k]
+            g_dc[i] = g_full @ h
+            gm_dc[i] = g_modal @ h
         G = d.dropper_flexibility[c]
-        # 3. Contact force and slack droppers (the exact passage's active set).
+        # 3. Contact forces and slack droppers (the exact passage's active set).
         step = settle(contact, st.slack.copy(), gap_known, c_cc, g_dc, dl_known, rate_term, kh, d.droppers, G)
         contact, st.slack[:], f, idx, lam, elastic = step[:6]
         # 4. The response on the interface, then every span's modes with the Newmark update.
-        x_b = x_b + f * (p_b @ h) + lam @ d.dropper_interface[c, idx]
+        for i in on:
+            x_b = x_b + f[i] * (element[i][2] @ points[i].shape[k])
+        x_b = x_b + lam @ d.dropper_interface[c, idx]
         for s, t, off, cpl in spans:
             m = kept[s]
             fq = e_vec[off : off + m].copy()
-            if s == s_el:
-                fq += f * (h @ rows_q[:, :m])
+            for i in on:
+                if d.element_span[points[i].element[k]] == s:
+                    fq += f[i] * (points[i].shape[k] @ element[i][0][:, :m])
             for q, lq in zip(idx, lam, strict=True):
                 if d.dropper_span[q] == s:
                     fq += lq * d.dropper_q_plain[q, :m]
@@ -116,21 +138,27 @@ def run_steps(  # noqa: C901
             u_new = fq * d.inverse_diagonal[t, :m] + y[p]
             _newmark(u, v, acc_s, e_vec, y, p, u_new, cf)
         _newmark(u, v, acc_s, e_vec, y, slice(n_q, None), x_b + y[n_q:], cf)
-        bu = dl_known + gm_dc * f + d.dropper_modal_flexibility[c][:, idx] @ lam
+        bu = dl_known + gm_dc.T @ f + d.dropper_modal_flexibility[c][:, idx] @ lam
         du = bu - st.Bu
         ba = a0 * du - a2 * st.Bv - a3 * st.Ba
         st.Bv[:] = a1 * du - a4 * st.Bv - a5 * st.Ba
         st.Ba[:] = ba
         st.Bu[:] = bu
-        advance_pantograph(point, cf, ps, y_known, f)
-        s, t, off, cpl = spans[s_el]
-        m = kept[s_el]
-        uplift = h @ (rows_q[:, :m] @ u[off : off + m] + rows_c[:, : cpl.size] @ u[n_q + cpl])
+        uplift = np.zeros(n_c)
+        for i in on:
+            advance_pantograph(points[i], cf, st.pantographs[i], y_known[i], f[i])
+            rows_q, rows_c = element[i][:2]
+            s, t, off, cpl = spans[d.element_span[points[i].element[k]]]
+            m = kept[s]
+            h = points[i].shape[k]
+            uplift[i] = h @ (rows_q[:, :m] @ u[off : off + m] + rows_c[:, : cpl.size] @ u[n_q + cpl])
+        heights = np.array([ps.y[head] for ps, head in zip(st.pantographs, heads, strict=True)])
         record(
-            st.history, k, f, ps.y[head], uplift, u[n_q + d.support], elastic, st.slack, idx.size > 0,
+            st.history, k, f, heights, uplift, u[n_q + d.support], elastic, st.slack, idx.size > 0,
             step.resolved,
         )  # fmt: skip
-    ps.contact[0] = int(contact)
+    for ps, touching in zip(st.pantographs, contact, strict=True):
+        ps.contact[0] = int(touching)
 
 
 def _schur_solve(d: SpanModeArrays, c: int, b: np.ndarray) -> np.ndarray:
@@ -153,8 +181,10 @@ def _element_rows(d: SpanModeArrays, e: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _element_responses(
     d: SpanModeArrays, c: int, e: int, rows_q: np.ndarray, rows_c: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """As the compiled loop's: p_b (n_b, 4), compliance (4, 4), g_modal and g_full (D, 4)."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """As the compiled loop's: p_b (n_b, 4), compliance (4, 4), g_modal and g_full (D, 4), and the
+    element's interface forces rows_c - c_m rows_q D⁻¹ M_qc (4, n_c): its displacement under the
+    interface's motion, through which another span's pantograph moves it."""
     c_m = d.coefficients.mass_factor
     s = d.element_span[e]
     t = d.span_type[s]
@@ -180,7 +210,7 @@ def _element_responses(
     drops = d.element_droppers[e]
     ok = drops >= 0
     g_full[drops[ok]] += d.element_dropper_residual[e][:, ok].T
-    return p_b, comp, g, g_full
+    return p_b, comp, g, g_full, rows_c[:, :nc] - c_m * rq @ coupling.T
 
 
 def _dropper_elongations(d: SpanModeArrays, c: int, vec: np.ndarray) -> np.ndarray:

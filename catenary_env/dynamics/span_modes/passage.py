@@ -12,12 +12,14 @@ from __future__ import annotations
 from collections.abc import Callable
 from types import ModuleType
 
-from ..contact_point import StartedPoint, initial_load, start_contact_point
+import numpy as np
+
+from ..contact_point import ContactPointArrays, initial_load, start_train
 from ..history import start_history, trajectory
 from ..newmark import Trajectory
-from ..protocol import Passage, choose_backend, run_in_chunks, single_contact_point
+from ..protocol import Passage, choose_backend, run_in_chunks
 from . import loop
-from .preparation import PreparedSpanModes, initial_acceleration
+from .preparation import PreparedSpanModes, SpanModeArrays, initial_acceleration
 from .state import SpanModeState, start_state
 
 
@@ -26,47 +28,75 @@ def run(prepared: PreparedSpanModes, passage: Passage) -> Trajectory:
     backend = choose_backend(passage.backend, BACKENDS, _compiled_kernels() is not None)
     reduced = prepared.reduced
     system = reduced.system
-    started = start_contact_point(
-        system, single_contact_point(passage), prepared.constants, passage.speed, passage.n_steps
-    )
-    d = prepared.arrays
-    first_span = d.element_span[started.arrays.element[0]]
-    acceleration = initial_acceleration(reduced, d.kept[first_span], initial_load(system, started))
+    started = start_train(system, passage, prepared.constants)
+    d, configuration = _configurations(prepared, tuple(one.arrays for one in started))
+    acceleration = initial_acceleration(reduced, d.kept[configuration[0]], initial_load(system, started))
     history = start_history(
-        started.time.size, system.support_z.size, system.dropper_force, started.force0, started.state.y[-1]
+        started[0].time.size,
+        system.support_z.size,
+        system.dropper_force,
+        np.array([one.force0 for one in started]),
+        np.array([one.state.y[-1] for one in started]),
     )
     state = start_state(acceleration, d.coefficients.e3, d.coefficients.g3, started, history)
-    BACKENDS[backend](prepared, started, state, passage.progress)
-    return trajectory(history, started.time, started.position, system.static.layout.support_x)
+    points = tuple(one.arrays for one in started)
+    BACKENDS[backend](d, points, state, configuration, passage.progress)
+    positions = tuple(one.position for one in started)
+    return trajectory(history, started[0].time, positions, system.static.layout.support_x)
+
+
+def _configurations(
+    prepared: PreparedSpanModes, points: tuple[ContactPointArrays, ...]
+) -> tuple[SpanModeArrays, np.ndarray]:
+    """The design's arrays with the configurations the passage meets, and each step's configuration: the
+    spans the pantographs are in (docs/model.md, 'Several pantographs'). One pantograph meets the
+    prepared configurations, one per span."""
+    d = prepared.arrays
+    spans = np.stack([np.where(p.element >= 0, d.element_span[np.maximum(p.element, 0)], -1) for p in points])
+    if len(points) == 1:
+        return d, spans[0]
+    on = spans >= 0
+    for i in range(len(points)):
+        for j in range(i + 1, len(points)):
+            shared = on[i] & on[j] & (spans[i] == spans[j])
+            if np.any(shared):
+                raise ValueError(
+                    f"passage.contact_points: pantographs {i + 1} and {j + 1} in one span "
+                    f"(span {spans[i][shared][0]}); the span-mode model needs them a span length apart at "
+                    "least (the exact model takes any spacing)"
+                )
+    tuples, configuration = np.unique(spans.T, axis=0, return_inverse=True)
+    return prepared.arrays_for(tuple(tuple(int(s) for s in row) for row in tuples)), configuration.ravel()
 
 
 def _run_numpy(
-    prepared: PreparedSpanModes,
-    started: StartedPoint,
+    d: SpanModeArrays,
+    points: tuple[ContactPointArrays, ...],
     state: SpanModeState,
+    configuration: np.ndarray,
     progress: Callable[[float], None] | None,
 ) -> None:
-    points = (started.arrays,)
     run_in_chunks(
-        lambda first, stop: loop.run_steps(prepared.arrays, points, state, first, stop),
-        started.time.size,
+        lambda first, stop: loop.run_steps(d, points, state, configuration, first, stop),
+        points[0].element.size,
         progress,
     )
 
 
 def _run_compiled(
-    prepared: PreparedSpanModes,
-    started: StartedPoint,
+    d: SpanModeArrays,
+    points: tuple[ContactPointArrays, ...],
     state: SpanModeState,
+    configuration: np.ndarray,
     progress: Callable[[float], None] | None,
 ) -> None:
     kernels = _compiled_kernels()
     if kernels is None:
         raise ImportError("backend='numba' needs numba: pip install numba")
-    points = (started.arrays,)
+    configuration = configuration.astype(np.int64)
     run_in_chunks(
-        lambda first, stop: kernels.run_steps(prepared.arrays, points, state, first, stop),
-        started.time.size,
+        lambda first, stop: kernels.run_steps(d, points, state, configuration, first, stop),
+        points[0].element.size,
         progress,
     )
 

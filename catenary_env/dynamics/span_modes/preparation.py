@@ -16,7 +16,11 @@ pantograph and dies out over a few spans (Rayleigh damping βω/2 grows with fre
 within ``near_spans`` of the pantograph keep their modes up to the near cut-off and the others only
 those below the far cut-off. The model therefore changes, by a span's high modes, when the pantograph
 crosses a support: a *configuration* per span the pantograph is in, each a proper Galerkin reduction
-with its own Schur complement. A span leaving the near field drops its high modes' state.
+with its own Schur complement. A span leaving the near field drops its high modes' state. With several
+pantographs the near field follows each (the near fields may merge): a configuration is the tuple of
+spans the pantographs are in, and which spans keep which modes is one function of it,
+:func:`kept_modes`; the configurations a passage meets are built when it first needs them
+(:meth:`PreparedSpanModes.arrays_for`).
 
 Residual flexibility. Within one step a force at the contact point or at a dropper also moves the
 truncated modes. Their share of the one-step compliance, R = K̂_ii⁻¹ - Φ D⁻¹ Φᵀ per span, is added
@@ -29,7 +33,7 @@ design, :class:`SpanModeArrays`; they follow the same steps (see :mod:`.kernels`
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
@@ -43,7 +47,8 @@ from .reduction import ReducedSystem, band_storage, band_width, reduce_system, s
 
 
 class SpanModeArrays(NamedTuple):
-    """What both loops read of the design. Shapes: S spans, T types, C = S configurations, D droppers, n_b
+    """What both loops read of the design. Shapes: S spans, T types, C configurations (one pantograph: C = S),
+    P pantographs, D droppers, n_b
     interface DOFs, w the Schur complement's band width, m, n_c, n_i the padded modes, coupled interface and
     internal DOFs of a span type, E contact-wire elements, K droppers per span.
     """
@@ -53,7 +58,7 @@ class SpanModeArrays(NamedTuple):
     coupled: np.ndarray  # (S, n_c) interface positions
     n_coupled: np.ndarray  # (T,)
     n_modes: np.ndarray  # (T,)
-    kept: np.ndarray  # (C, S) modes each span keeps in configuration c
+    kept: np.ndarray  # (C, S) modes each span keeps in configuration c (kept_modes)
     coupling: np.ndarray  # (T, n_c, m) M_cq
     inverse_diagonal: np.ndarray  # (T, m) 1 / D
     weight: np.ndarray  # (T, m) 1 - c_m / D
@@ -82,8 +87,8 @@ class SpanModeArrays(NamedTuple):
     element_dropper_residual: np.ndarray  # (E, 4, K)
     element_modal_compliance: np.ndarray  # (E, 4, 4) rows_q D⁻¹ rows_qᵀ
     element_dropper_modal: np.ndarray  # (E, 4, K) rows_q D⁻¹ B_qᵀ for the span's droppers
-    element_interface: np.ndarray  # (C, n_c, n_b) S⁻¹ at span c's coupled interface DOFs
-    dropper_element_interface: np.ndarray  # (C, n_c, D) (B_c - c_m H) S⁻¹ there
+    element_interface: np.ndarray  # (C, P, n_c, n_b) S⁻¹ at pantograph p's span's coupled interface DOFs
+    dropper_element_interface: np.ndarray  # (C, P, n_c, D) (B_c - c_m H) S⁻¹ there
     support: np.ndarray  # (supports,) interface position of each contact-wire support
     droppers: Droppers
     coefficients: StepCoefficients
@@ -112,19 +117,34 @@ class PreparedSpanModes:
     constants : NewmarkConstants
     near_spans : int
     arrays : SpanModeArrays
-        What both loops read of the design.
+        What both loops read of the design, with the configurations of one pantograph (configuration c:
+        the pantograph in span c).
+    builder : _ConfigurationBuilder
+        Builds the configurations of several pantographs (:meth:`arrays_for`), once each.
     """
 
     reduced: ReducedSystem
     constants: NewmarkConstants
     near_spans: int
     arrays: SpanModeArrays
+    builder: _ConfigurationBuilder = field(repr=False, compare=False)
+    built: dict[tuple[int, ...], dict[str, np.ndarray]] = field(
+        default_factory=dict, repr=False, compare=False
+    )
+
+    def arrays_for(self, configurations: tuple[tuple[int, ...], ...]) -> SpanModeArrays:
+        """The design's arrays with these configurations, each the spans the pantographs are in (-1: off
+        the section); a configuration is built on its first use and kept."""
+        for one in configurations:
+            if one not in self.built:
+                self.built[one] = self.builder.build(one)
+        return self.arrays._replace(**stack_configurations([self.built[one] for one in configurations]))
 
 
 def prepare(system: LinearSystem, fidelity: DynamicsSettings) -> PreparedSpanModes:
     """The span modes below the fidelity's cut-offs (:func:`.reduction.reduce_system`) and, for its time
     step and near spans, the Schur complements, dropper responses and residual compliances of every
-    configuration."""
+    configuration of one pantograph."""
     if not system.rayleigh:
         raise ValueError(
             "the span-mode model integrates C = alpha M + beta K with slack droppers dropping their whole "
@@ -135,17 +155,17 @@ def prepare(system: LinearSystem, fidelity: DynamicsSettings) -> PreparedSpanMod
 
 
 def prepare_reduced(reduced: ReducedSystem, time_step: float, near_spans: int) -> PreparedSpanModes:
-    """:func:`prepare` of a reduced system, for a time step (s) and the spans on each side of the
+    """:func:`prepare` of a reduced system, for a time step (s) and the spans on each side of a
     pantograph's that keep the near cut-off."""
     system = reduced.system
     nm = NewmarkConstants.for_step(time_step)
     c_k = 1.0 + system.beta * nm.a1
     c_m = nm.a0 + system.alpha * nm.a1
     modes = _mode_arrays(reduced, c_k, c_m)
-    kept = _kept_modes(reduced, near_spans)
     droppers = _dropper_arrays(reduced, modes["inverse_diagonal"])
     residual = _Residuals(reduced, c_k, c_m, droppers["dropper_span"])
-    configurations = _configurations(reduced, c_k, c_m, kept, modes, droppers, residual)
+    builder = _ConfigurationBuilder(reduced, c_k, c_m, modes, droppers, residual, near_spans)
+    configurations = stack_configurations([builder.build((s,)) for s in range(reduced.span_type.size)])
     elements = _element_arrays(reduced, droppers, residual)
     kh = system.static.layout.catenary.contact_stiffness
     arrays = SpanModeArrays(
@@ -153,12 +173,11 @@ def prepare_reduced(reduced: ReducedSystem, time_step: float, near_spans: int) -
         **droppers,
         **configurations,
         **elements,
-        kept=kept,
         droppers=Droppers.for_step(system.dropper_rate, system.dropper_force, system.beta, nm.a1),
         support=residual.interface_position[system.support_z],
         coefficients=StepCoefficients.for_step(nm, system.alpha, system.beta, kh),
     )
-    return PreparedSpanModes(reduced, nm, near_spans, arrays)
+    return PreparedSpanModes(reduced, nm, near_spans, arrays, builder)
 
 
 def _mode_arrays(reduced: ReducedSystem, c_k: float, c_m: float) -> dict[str, np.ndarray]:
@@ -201,15 +220,6 @@ def _mode_arrays(reduced: ReducedSystem, c_k: float, c_m: float) -> dict[str, np
         constraint=constraint,
         shape_coupling=shape_coupling,
     )
-
-
-def _kept_modes(reduced: ReducedSystem, near_spans: int) -> np.ndarray:
-    """(C, S): the modes span s keeps while the pantograph is in span c."""
-    n_spans = reduced.span_type.size
-    far = np.array([t.far_modes for t in reduced.types])[reduced.span_type]
-    full = np.array([t.n_modes for t in reduced.types])[reduced.span_type]
-    near = np.abs(np.arange(n_spans)[:, None] - np.arange(n_spans)[None, :]) <= near_spans
-    return np.where(near, full[None, :], far[None, :]).astype(np.int64)
 
 
 def _dropper_arrays(reduced: ReducedSystem, inv_d: np.ndarray) -> dict[str, np.ndarray]:
@@ -292,105 +302,152 @@ class _Residuals:
         return rows @ (self.near[t] if near else self.far[t]) @ rows.T
 
 
-def _configurations(
-    reduced: ReducedSystem,
-    c_k: float,
-    c_m: float,
-    kept: np.ndarray,
-    modes: dict[str, np.ndarray],
-    droppers: dict[str, np.ndarray],
-    residual: _Residuals,
-) -> dict[str, np.ndarray]:
-    """Per configuration: S's banded factor, Y, H = B_q D⁻¹ M_qc, the droppers' interface responses
-    and their flexibility G (of the kept modes, and with the residual); and for the pantograph's span,
-    S⁻¹ at its coupled interface DOFs and the droppers' elongations there (B_c - c_m H) S⁻¹."""
-    types = reduced.types
+def kept_modes(reduced: ReducedSystem, near_spans: int, configuration: tuple[int, ...]) -> np.ndarray:
+    """(S,): the modes each span keeps in a configuration, the spans the pantographs are in (-1: a
+    pantograph off the section): those within ``near_spans`` of a pantograph keep their near modes, the
+    others their far modes (docs/model.md, 'Several pantographs'). The configurations' arrays
+    (:class:`_ConfigurationBuilder`) follow whatever this returns, as long as each count is one the span's
+    blocks and residual compliances are prepared for (its near or far count: another, such as none for the
+    spans far from every pantograph, needs its blocks in ``_ConfigurationBuilder.__init__`` and
+    :class:`_Residuals`)."""
     n_spans = reduced.span_type.size
-    n_b = reduced.interface.size
-    d_span, d_q, d_qd, d_c = (
-        droppers[k] for k in ("dropper_span", "dropper_q_plain", "dropper_q", "dropper_c")
-    )
-    n_drop, nc_max = d_c.shape
-    inv_d, coupling = modes["inverse_diagonal"], modes["coupling"]
-    width = max(
-        max((int(np.ptp(c)) for c in reduced.coupled if c.size), default=0),
-        band_width(reduced.interface_mass),
-        band_width(reduced.interface_stiffness),
-    )
-    out = dict(
-        schur_band=np.zeros((n_spans, width + 1, n_b)),
-        schur_columns=np.zeros((n_spans, n_b, width)),
-        schur_rows=np.zeros((n_spans, n_b, width)),
-        schur_inverse_diagonal=np.zeros((n_spans, n_b)),
-        interface_rhs_rows=np.zeros((n_spans, n_b, 2 * width + 1)),
-        dropper_h=np.zeros((n_spans, n_drop, nc_max)),
-        dropper_interface=np.zeros((n_spans, n_drop, n_b)),
-        dropper_flexibility=np.zeros((n_spans, n_drop, n_drop)),
-        dropper_modal_flexibility=np.zeros((n_spans, n_drop, n_drop)),
-        element_interface=np.zeros((n_spans, nc_max, n_b)),
-        dropper_element_interface=np.zeros((n_spans, nc_max, n_drop)),
-    )
-    # A span's share of Σ M_cq D⁻¹ M_qc, of its droppers' H, G and residual, per mode count kept.
-    start = droppers["dropper_start"]
-    span_sum, span_h, modal_block, residual_block = {}, {}, {}, {}
-    for s in range(n_spans):
-        t = reduced.span_type[s]
-        q = slice(start[s], start[s + 1])
-        for k in {types[t].far_modes, types[t].n_modes}:
-            mqc = types[t].mass_coupling[:k] * np.sqrt(inv_d[t, :k, None])
-            span_sum[s, k] = mqc.T @ mqc
-            span_h[s, k] = d_qd[q, :k] @ coupling[t, :, :k].T
-            modal_block[s, k] = (d_q[q, :k] * inv_d[t, :k]) @ d_q[q, :k].T
-            residual_block[s, k] = residual.dropper_block(reduced, s, near=k == types[t].n_modes)
-    d_cols = modes["coupled"][d_span]
-    d_valid = np.arange(nc_max)[None, :] < modes["n_coupled"][reduced.span_type[d_span]][:, None]
-    d_rows = np.repeat(np.arange(n_drop), nc_max)[d_valid.ravel()]
-    # Every span with its far modes; a configuration adds its near spans' differences.
-    far = np.array([types[t].far_modes for t in reduced.span_type])
-    far_sum = np.zeros((n_b, n_b))
-    far_h = np.zeros((n_drop, nc_max))
-    far_blocks = np.zeros((2, n_drop, n_drop))  # the droppers' G of their span's modes, and with the residual
-    for s, c in enumerate(reduced.coupled):
-        q = slice(start[s], start[s + 1])
-        far_sum[np.ix_(c, c)] += span_sum[s, far[s]]
-        far_h[q] = span_h[s, far[s]]
-        far_blocks[0, q, q] = modal_block[s, far[s]]
-        far_blocks[1, q, q] = modal_block[s, far[s]] + residual_block[s, far[s]]
-    diagonals = np.arange(n_b)[:, None] + np.arange(-width, width + 1)[None, :]  # Y[r, r + k] at [r, w + k]
-    inside = (diagonals >= 0) & (diagonals < n_b)
-    diagonals = np.clip(diagonals, 0, n_b - 1)
-    for p in range(n_spans):
-        sum_coupling = far_sum.copy()
-        dropper_h = out["dropper_h"][p]
-        dropper_h[:] = far_h
-        G, G_full = out["dropper_modal_flexibility"][p], out["dropper_flexibility"][p]
-        G[:], G_full[:] = far_blocks
-        for s in np.flatnonzero(kept[p] != far):
-            c, q, k = reduced.coupled[s], slice(start[s], start[s + 1]), kept[p, s]
-            sum_coupling[np.ix_(c, c)] += span_sum[s, k] - span_sum[s, far[s]]
-            dropper_h[q] = span_h[s, k]
-            G[q, q] = modal_block[s, k]
-            G_full[q, q] = modal_block[s, k] + residual_block[s, k]
+    far = np.array([t.far_modes for t in reduced.types])[reduced.span_type]
+    full = np.array([t.n_modes for t in reduced.types])[reduced.span_type]
+    spans = np.array([s for s in configuration if s >= 0], dtype=np.int64)
+    distance = np.abs(np.arange(n_spans)[:, None] - spans[None, :]).min(axis=1, initial=n_spans)
+    return np.where(distance <= near_spans, full, far).astype(np.int64)
+
+
+CONFIGURATION_FIELDS = (
+    "schur_band",
+    "schur_columns",
+    "schur_rows",
+    "schur_inverse_diagonal",
+    "interface_rhs_rows",
+    "dropper_h",
+    "dropper_interface",
+    "dropper_flexibility",
+    "dropper_modal_flexibility",
+    "element_interface",
+    "dropper_element_interface",
+)
+"""The fields of :class:`SpanModeArrays` with one entry per configuration (besides ``kept``)."""
+
+
+class _ConfigurationBuilder:
+    """Builds a configuration's arrays (:meth:`build`) from the blocks every configuration shares: each
+    span's share of Σ M_cq D⁻¹ M_qc, of its droppers' H, G and residual, per mode count kept, and every span
+    with its far modes."""
+
+    def __init__(
+        self,
+        reduced: ReducedSystem,
+        c_k: float,
+        c_m: float,
+        modes: dict[str, np.ndarray],
+        droppers: dict[str, np.ndarray],
+        residual: _Residuals,
+        near_spans: int,
+    ) -> None:
+        types = reduced.types
+        n_spans = reduced.span_type.size
+        self.reduced, self.c_k, self.c_m, self.near_spans = reduced, c_k, c_m, near_spans
+        d_span, d_q, d_qd, d_c = (
+            droppers[k] for k in ("dropper_span", "dropper_q_plain", "dropper_q", "dropper_c")
+        )
+        self.d_c = d_c
+        n_drop, nc_max = d_c.shape
+        inv_d, coupling = modes["inverse_diagonal"], modes["coupling"]
+        self.width = max(
+            max((int(np.ptp(c)) for c in reduced.coupled if c.size), default=0),
+            band_width(reduced.interface_mass),
+            band_width(reduced.interface_stiffness),
+        )
+        # A span's share of Σ M_cq D⁻¹ M_qc, of its droppers' H, G and residual, per mode count kept.
+        self.start = start = droppers["dropper_start"]
+        self.span_sum, self.span_h, self.modal_block, self.residual_block = {}, {}, {}, {}
+        for s in range(n_spans):
+            t = reduced.span_type[s]
+            q = slice(start[s], start[s + 1])
+            for k in {types[t].far_modes, types[t].n_modes}:
+                mqc = types[t].mass_coupling[:k] * np.sqrt(inv_d[t, :k, None])
+                self.span_sum[s, k] = mqc.T @ mqc
+                self.span_h[s, k] = d_qd[q, :k] @ coupling[t, :, :k].T
+                self.modal_block[s, k] = (d_q[q, :k] * inv_d[t, :k]) @ d_q[q, :k].T
+                self.residual_block[s, k] = residual.dropper_block(reduced, s, near=k == types[t].n_modes)
+        self.d_cols = modes["coupled"][d_span]
+        self.d_valid = np.arange(nc_max)[None, :] < modes["n_coupled"][reduced.span_type[d_span]][:, None]
+        self.d_rows = np.repeat(np.arange(n_drop), nc_max)[self.d_valid.ravel()]
+        # Every span with its far modes; a configuration adds its near spans' differences.
+        self.far = far = np.array([types[t].far_modes for t in reduced.span_type])
+        n_b = reduced.interface.size
+        self.far_sum = np.zeros((n_b, n_b))
+        self.far_h = np.zeros((n_drop, nc_max))
+        self.far_blocks = np.zeros(
+            (2, n_drop, n_drop)
+        )  # the droppers' G of their span's modes, with residual
+        for s, c in enumerate(reduced.coupled):
+            q = slice(start[s], start[s + 1])
+            self.far_sum[np.ix_(c, c)] += self.span_sum[s, far[s]]
+            self.far_h[q] = self.span_h[s, far[s]]
+            self.far_blocks[0, q, q] = self.modal_block[s, far[s]]
+            self.far_blocks[1, q, q] = self.modal_block[s, far[s]] + self.residual_block[s, far[s]]
+        diagonals = np.arange(n_b)[:, None] + np.arange(-self.width, self.width + 1)[None, :]
+        self.inside = (diagonals >= 0) & (diagonals < n_b)  # Y[r, r + k] at [r, w + k]
+        self.diagonals = np.clip(diagonals, 0, n_b - 1)
+
+    def build(self, configuration: tuple[int, ...]) -> dict[str, np.ndarray]:
+        """One configuration's arrays (:data:`CONFIGURATION_FIELDS` and ``kept``): S's banded factor, Y,
+        H = B_q D⁻¹ M_qc, the droppers' interface responses and their flexibility G (of the kept modes, and
+        with the residual); and for each pantograph's span, S⁻¹ at its coupled interface DOFs and the
+        droppers' elongations there (B_c - c_m H) S⁻¹."""
+        reduced, c_k, c_m, width, start = self.reduced, self.c_k, self.c_m, self.width, self.start
+        n_b = reduced.interface.size
+        n_drop, nc_max = self.d_c.shape
+        kept = kept_modes(reduced, self.near_spans, configuration)
+        sum_coupling = self.far_sum.copy()
+        dropper_h = self.far_h.copy()
+        G, G_full = self.far_blocks.copy()
+        for s in np.flatnonzero(kept != self.far):
+            c, q, k = reduced.coupled[s], slice(start[s], start[s + 1]), kept[s]
+            sum_coupling[np.ix_(c, c)] += self.span_sum[s, k] - self.span_sum[s, self.far[s]]
+            dropper_h[q] = self.span_h[s, k]
+            G[q, q] = self.modal_block[s, k]
+            G_full[q, q] = self.modal_block[s, k] + self.residual_block[s, k]
         schur = c_k * reduced.interface_stiffness + c_m * reduced.interface_mass - c_m**2 * sum_coupling
         factor = sla.cholesky_banded(band_storage(0.5 * (schur + schur.T), width), check_finite=False)
-        out["schur_band"][p] = factor
-        out["schur_columns"][p], out["schur_rows"][p], out["schur_inverse_diagonal"][p] = band_rows(factor)
+        out = dict(kept=kept, schur_band=factor, dropper_h=dropper_h)
+        out["schur_columns"], out["schur_rows"], out["schur_inverse_diagonal"] = band_rows(factor)
         Y = reduced.interface_mass - c_m * sum_coupling
-        out["interface_rhs_rows"][p] = np.where(inside, Y[np.arange(n_b)[:, None], diagonals], 0.0)
+        out["interface_rhs_rows"] = np.where(self.inside, Y[np.arange(n_b)[:, None], self.diagonals], 0.0)
         # B_c - c_m H on the interface: a unit dropper force's right-hand side (≤ n_c entries a row)
         H = np.zeros((n_drop, n_b))
-        H[d_rows, d_cols[d_valid]] = (d_c - c_m * dropper_h)[d_valid]
-        own = reduced.coupled[p]  # the pantograph's span: unit forces at its coupled interface DOFs
-        unit = np.zeros((n_b, own.size))
-        unit[own, np.arange(own.size)] = 1.0
-        X = sla.cho_solve_banded((factor, False), np.c_[H.T, unit], check_finite=False)
-        X, out["element_interface"][p, : own.size] = X[:, :n_drop], X[:, n_drop:].T
-        out["dropper_interface"][p] = X.T
-        out["dropper_element_interface"][p, : own.size] = X[own]
+        H[self.d_rows, self.d_cols[self.d_valid]] = (self.d_c - c_m * dropper_h)[self.d_valid]
+        owns = [reduced.coupled[s] if s >= 0 else np.zeros(0, dtype=np.int64) for s in configuration]
+        units = []  # each pantograph's span: unit forces at its coupled interface DOFs
+        for own in owns:
+            unit = np.zeros((n_b, own.size))
+            unit[own, np.arange(own.size)] = 1.0
+            units.append(unit)
+        X = sla.cho_solve_banded((factor, False), np.c_[(H.T, *units)], check_finite=False)
+        out["element_interface"] = np.zeros((len(owns), nc_max, n_b))
+        out["dropper_element_interface"] = np.zeros((len(owns), nc_max, n_drop))
+        column = n_drop
+        for p, own in enumerate(owns):
+            out["element_interface"][p, : own.size] = X[:, column : column + own.size].T
+            out["dropper_element_interface"][p, : own.size] = X[own, :n_drop]
+            column += own.size
+        X = X[:, :n_drop]
+        out["dropper_interface"] = X.T
         HX = H @ X
-        G += HX
-        G_full += HX
-    return out
+        out["dropper_modal_flexibility"] = G + HX
+        out["dropper_flexibility"] = G_full + HX
+        return out
+
+
+def stack_configurations(built: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """Configurations' arrays (:meth:`_ConfigurationBuilder.build`), one after the other."""
+    return {name: np.stack([one[name] for one in built]) for name in ("kept", *CONFIGURATION_FIELDS)}
 
 
 def _element_arrays(

@@ -24,9 +24,10 @@ class SpanModeState(NamedTuple):
     Bu, Bv, Ba : ndarray (D,)
         The droppers' elongations of u, v, a.
     configuration : ndarray (1,) of int
-        The configuration the state is in (the pantograph's span; -1: none yet).
+        The configuration the state is in (the spans the pantographs are in; -1: none yet).
     slack : ndarray (D,) of bool
-    pantograph : PantographState
+    pantographs : tuple of PantographState
+        Each contact point's pantograph.
     history : PassageHistory
     """
 
@@ -40,12 +41,16 @@ class SpanModeState(NamedTuple):
     Ba: np.ndarray
     configuration: np.ndarray
     slack: np.ndarray
-    pantograph: PantographState
+    pantographs: tuple[PantographState, ...]
     history: PassageHistory
 
 
 def start_state(
-    acceleration: np.ndarray, e3: float, g3: float, started: StartedPoint, history: PassageHistory
+    acceleration: np.ndarray,
+    e3: float,
+    g3: float,
+    started: tuple[StartedPoint, ...],
+    history: PassageHistory,
 ) -> SpanModeState:
     """At rest with the initial ``acceleration`` (n_r,); e3 and g3 of the step coefficients give the first
     right-hand side."""
@@ -62,6 +67,6 @@ def start_state(
         Ba=np.zeros(n_drop),
         configuration=np.array([-1], dtype=np.int64),
         slack=np.zeros(n_drop, dtype=np.bool_),
-        pantograph=started.state,
+        pantographs=tuple(one.state for one in started),
         history=history,
     )

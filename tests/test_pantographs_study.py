@@ -1,0 +1,78 @@
+"""The two-pantograph study (experiments/pantographs.py): a cheap setting in the default suite, the real quick
+run behind the ``slow`` marker."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from experiments import pantographs
+
+
+class _InProcess:
+    """A stand-in for a process pool: maps in this process."""
+
+    def __init__(self, max_workers: int) -> None:
+        pass
+
+    def __enter__(self) -> _InProcess:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+    def map(self, function, *iterables):  # noqa: ANN001, ANN201
+        return map(function, *iterables)
+
+
+def test_the_optima_table_on_a_cheap_setting(tmp_path, monkeypatch):
+    # SW1 alone, its optimum given as the reference design itself: it cannot beat the level wire. A fixed
+    # uplift force spares the calibration.
+    from catenary_env.problems.design_problem import DesignProblem
+
+    monkeypatch.setattr(DesignProblem, "uplift_force", lambda self, speed_kmh=300.0, fidelity="study": 160.0)
+    designs = tmp_path / "designs" / "design" / "SW1"
+    designs.mkdir(parents=True)
+    (designs / "summary.json").write_text(json.dumps({"optimum_x": [0.0, 0.0, 0.0, 0.0]}))
+    monkeypatch.setattr(
+        pantographs, "ProcessPoolExecutor", _InProcess
+    )  # the patch holds in this process only
+    config = pantographs.Config(
+        out=tmp_path, workers=1, designs=tmp_path / "designs", problems=("SW1",), optima_only=True
+    )
+    folder = pantographs.main(config)
+    rows = pantographs.read_csv(folder / "optima.csv")
+    assert [r["design"] for r in rows] == ["level", "optimum"]
+    level, optimum = rows
+    assert optimum["sigma_trailing_N"] == pytest.approx(level["sigma_trailing_N"], rel=1e-12)
+    assert level["sigma_trailing_N"] != pytest.approx(level["sigma_leading_N"], rel=1e-3)
+    assert [r["beats_level_trailing"] for r in pantographs.beats_level(rows)] == [0, 0]
+    assert (folder / "model.json").exists() and not (folder / "speed.csv").exists()
+    written = (folder / "pantographs.md").read_text(encoding="utf-8")
+    (folder / "pantographs.md").unlink()
+    pantographs.report(folder)
+    assert (folder / "pantographs.md").read_text(encoding="utf-8") == written
+
+
+def test_the_quick_gas_train_fits_its_section():
+    config = pantographs.Config()
+    assert config.ga_fidelity == "test" and config.ga_spacing("B1") == 55.0
+    assert pantographs.Config(full=True).ga_spacing("SW1") == pantographs.SPACING
+
+
+@pytest.mark.slow  # the real quick study: a minute or two
+def test_the_quick_study_writes_its_data_and_remakes_its_report(tmp_path):
+    folder = pantographs.main(pantographs.Config(out=tmp_path, workers=1))
+    for name in (
+        "optima.csv",
+        "speed.csv",
+        "designs.json",
+        "pantographs.md",
+        "pantographs.png",
+        "model.json",
+    ):
+        assert (folder / name).stat().st_size > 0, name
+    speeds = pantographs.read_csv(folder / "speed.csv")
+    assert {r["design"] for r in speeds} <= {"single", "worst"}
+    assert {r["speed_kmh"] for r in speeds} == set(pantographs.Config().speeds_kmh)
