@@ -117,7 +117,9 @@ def evaluate_design(
     force = p.uplift_force(speed_kmh, fidelity)
     if x is None:  # B3 and SW3 cannot express it in their variables
         catenary, pantograph = p.catenary_definition, p.pantograph_definition
-        return evaluate(catenary, pantograph, p.reference_design(), speed_kmh / 3.6, fidelity, force, train)
+        return evaluate(
+            catenary, pantograph, p.reference_design(), speed_kmh / 3.6, fidelity, force, train=train
+        )
     return p.evaluate(x, speed_kmh, fidelity, uplift_force=force, train=train)
 
 

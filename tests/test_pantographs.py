@@ -178,7 +178,13 @@ def test_an_evaluation_carries_every_pantographs_statistics_and_its_objective(
     sigmas = {}
     for objective in OBJECTIVES:
         two = evaluate(
-            benchmark_catenary, p, design, SPEED, _fidelity(), 160.0, Train.behind([p], 110.0, objective)
+            benchmark_catenary,
+            p,
+            design,
+            SPEED,
+            _fidelity(),
+            160.0,
+            train=Train.behind([p], 110.0, objective),
         )
         leading, trailing = two.pantograph_statistics
         assert two.statistics == leading
@@ -204,7 +210,9 @@ def test_a_spacing_the_section_cannot_take_is_refused_naming_the_range(
     design = level_design(benchmark_catenary)
     for spacing in (20.0, 300.0):  # less than a span; the leading pantograph would leave 8 spans too soon
         with pytest.raises(DesignError, match="55 m apart at least and 165 m at most"):
-            evaluate(benchmark_catenary, p, design, SPEED, _fidelity(), 160.0, Train.behind([p], spacing))
+            evaluate(
+                benchmark_catenary, p, design, SPEED, _fidelity(), 160.0, train=Train.behind([p], spacing)
+            )
     with pytest.raises(DesignError, match="train.objective = 'best'"):
         Train.behind([p], 100.0, "best")
 
