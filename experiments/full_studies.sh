@@ -7,7 +7,8 @@ set -euo pipefail
 # results, and the report. A simulation of SW1 costs about 1.5 times one of B1 (and B1's comparison meets
 # more designs that fail the static check, which cost no dynamics), so the lanes split SW1's comparison by
 # optimiser: each lane finishes its share of the comparison, the headline, at about the same time, then
-# runs the RL studies of one problem. Last, the two-pantograph study (it reads the design studies' optima).
+# runs the RL studies of one problem. Last, the two-pantograph and the tolerance studies (they read the design
+# studies' optima). The amortised RL study has a script of its own (experiments/full_rl_amortised.sh, 20 h).
 # Each command resumes from OUT/runs.sqlite, so this script can be killed and started again at any time;
 # it takes about 35 hours on two cores (docs/performance.md, 'The full studies' and 'The full protocol of the
 # optimiser benchmark').
@@ -42,4 +43,6 @@ python -m experiments.optimizer_comparison --full --workers "$WORKERS" --out "$O
 python -m experiments.rl_studies --full --workers "$WORKERS" --out "$OUT"
 # Two pantographs: the design studies' optima behind a leader, and the GA for the worse pantograph.
 python -m experiments.pantographs --full --designs "$OUT" --workers "$WORKERS" --out "$OUT"
+# Installation tolerances, the design studies under buildability limits and the robust GA (docs/acceptance.md).
+python -m experiments.tolerance --full --workers "$WORKERS" --out "$OUT"
 python -m catenary_env.cli report --out "$OUT"
