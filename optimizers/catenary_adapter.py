@@ -105,5 +105,5 @@ def catenary_problem(name: str, train: Train = SINGLE) -> CatenaryProblem:
         problem.store_fingerprint()
         if train == SINGLE
         else model_fingerprint(problem.store_fingerprint(), train),
-        train,
+        train=train,
     )

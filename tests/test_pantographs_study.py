@@ -61,6 +61,22 @@ def test_the_quick_gas_train_fits_its_section():
     assert pantographs.Config(full=True).ga_spacing("SW1") == pantographs.SPACING
 
 
+def test_the_gas_problem_simulates_its_train():
+    # The GA of part 2 sees the train through the optimisers' adapter: its σ is the worse pantograph's, not
+    # the single pantograph's (the store keys them apart too).
+    from catenary_env.problems import evaluate_problem
+    from optimizers.catenary_adapter import catenary_problem
+
+    train = pantographs.train_of("B1", "worst", pantographs.Config().ga_spacing("B1"))
+    problem = catenary_problem("B1", train)
+    x = (0.0, 0.0, 0.0, 0.0, 0.0)
+    outcome = problem.simulate(x, 300.0, "test")
+    both = evaluate_problem("B1", x, 300.0, "test", train=train).pantograph_statistics
+    assert outcome.sigma == pytest.approx(max(s.std for s in both), rel=1e-12)
+    assert outcome.sigma != pytest.approx(catenary_problem("B1").simulate(x, 300.0, "test").sigma, rel=1e-3)
+    assert problem.model_fingerprint != catenary_problem("B1").model_fingerprint
+
+
 @pytest.mark.slow  # the real quick study: a minute or two
 def test_the_quick_study_writes_its_data_and_remakes_its_report(tmp_path):
     folder = pantographs.main(pantographs.Config(out=tmp_path, workers=1))
