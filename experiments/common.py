@@ -12,7 +12,9 @@ import argparse
 import csv
 import dataclasses
 import json
+import os
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -134,10 +136,10 @@ def config_from(config_class: Any, args: argparse.Namespace) -> Any:
     """The study's ``Config`` from its parsed options: each field from the option of its name (lists as
     tuples); a field without an option keeps its default."""
     values = {}
-    for field in dataclasses.fields(config_class):
-        if hasattr(args, field.name):
-            value = getattr(args, field.name)
-            values[field.name] = tuple(value) if isinstance(value, list) else value
+    for one in dataclasses.fields(config_class):
+        if hasattr(args, one.name):
+            value = getattr(args, one.name)
+            values[one.name] = tuple(value) if isinstance(value, list) else value
     return config_class(**values)
 
 
@@ -162,3 +164,38 @@ def run_cli(cli: Callable[[], int], name: str) -> int:
     simulated is in the run store; run it again to resume)."""
     raise_on_sigterm()
     return run_command(name, lambda _: cli(), argparse.Namespace(), "; run it again to resume")
+
+
+# -- resumable results -----------------------------------------------------------------------------------
+
+
+@dataclass
+class ResultLog:
+    """Append-only JSON-lines file of finished computations: an interrupted study resumes from it.
+
+    Each line is ``{"key": ..., "value": ...}``, written and flushed as soon as the computation ends;
+    a line cut short by a kill is ignored on reading.
+    """
+
+    path: Path
+    entries: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.path.exists():
+            for line in self.path.read_text(encoding="utf-8").splitlines():
+                try:
+                    entry = json.loads(line)
+                except json.JSONDecodeError:
+                    continue
+                self.entries[entry["key"]] = entry["value"]
+
+    def get(self, key: str) -> Any:
+        return self.entries.get(key)
+
+    def put(self, key: str, value: Any) -> Any:
+        with open(self.path, "a", encoding="utf-8") as handle:
+            handle.write(json.dumps({"key": key, "value": value}) + "\n")
+            handle.flush()
+            os.fsync(handle.fileno())
+        self.entries[key] = value
+        return value

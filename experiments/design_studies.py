@@ -27,10 +27,9 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -47,6 +46,7 @@ from optimizers.runner import optimize
 from .common import (
     DEFAULT_OUT,
     STORE,
+    ResultLog,
     add_full_option,
     add_out_option,
     add_workers_option,
@@ -103,41 +103,6 @@ class Config:
     @property
     def stiffness_points(self) -> int:
         return 23 if self.full else 7
-
-
-# -- resumable results -----------------------------------------------------------------------------------
-
-
-@dataclass
-class ResultLog:
-    """Append-only JSON-lines file of finished computations: an interrupted study resumes from it.
-
-    Each line is ``{"key": ..., "value": ...}``, written and flushed as soon as the computation ends;
-    a line cut short by a kill is ignored on reading.
-    """
-
-    path: Path
-    entries: dict[str, Any] = field(default_factory=dict)
-
-    def __post_init__(self) -> None:
-        if self.path.exists():
-            for line in self.path.read_text(encoding="utf-8").splitlines():
-                try:
-                    entry = json.loads(line)
-                except json.JSONDecodeError:
-                    continue
-                self.entries[entry["key"]] = entry["value"]
-
-    def get(self, key: str) -> Any:
-        return self.entries.get(key)
-
-    def put(self, key: str, value: Any) -> Any:
-        with open(self.path, "a", encoding="utf-8") as handle:
-            handle.write(json.dumps({"key": key, "value": value}) + "\n")
-            handle.flush()
-            os.fsync(handle.fileno())
-        self.entries[key] = value
-        return value
 
 
 Task = tuple[str, "tuple[float, ...] | None"]

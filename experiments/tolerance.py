@@ -28,7 +28,8 @@ import functools
 import json
 import math
 import sys
-from concurrent.futures import ProcessPoolExecutor
+from collections.abc import Callable, Iterator
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -49,6 +50,7 @@ from optimizers.problem import Outcome
 from .common import (
     DEFAULT_OUT,
     STORE,
+    ResultLog,
     add_full_option,
     add_out_option,
     add_workers_option,
@@ -222,6 +224,20 @@ def variant_problem(name: str, suffix: str, buildability: BuildabilityLimits, ro
 # -- the three parts ---------------------------------------------------------------------------------------
 
 
+def _completed(
+    config: Config, function: Callable[..., Any], jobs: list[tuple[Any, ...]]
+) -> Iterator[tuple[tuple[Any, ...], Any]]:
+    """(job, result) of each job as it completes: in this process with one worker, else in a pool."""
+    if config.workers == 1 or len(jobs) < 2:
+        for job in jobs:
+            yield job, function(*job)
+        return
+    with ProcessPoolExecutor(max_workers=config.workers) as pool:
+        futures = {pool.submit(function, *job): job for job in jobs}
+        for future in as_completed(futures):
+            yield futures[future], future.result()
+
+
 def _map(config: Config, jobs: list[tuple[Any, ...]]) -> list[Evaluation]:
     if config.workers == 1 or len(jobs) < 2:
         return [evaluate_draw(*job) for job in jobs]
@@ -245,20 +261,45 @@ def _row(label: str, problem: str, level_mm: float, draw: int, ev: Evaluation) -
     }
 
 
+def spread_row(
+    label: str,
+    problem: str,
+    level_mm: float,
+    draw: int,
+    x: tuple[float, ...],
+    tolerances: Tolerances | None,
+    seed: int,
+    fidelity: str,
+    uplift: float,
+) -> dict[str, Any]:
+    """One row of the spread, in a worker: the design as designed (``draw`` -1) or on one draw."""
+    evaluation = evaluate_draw(problem, x, tolerances, seed, draw, fidelity, uplift)
+    return _row(label, problem, level_mm, draw, evaluation)
+
+
 def run_spread(config: Config, folder: Path) -> None:
-    """Part 1: every design, nominal (level 0, draw -1) and on the draws of each level."""
+    """Part 1: every design, nominal (level 0, draw -1) and on the draws of each level. Each row is logged
+    as it completes (``log.jsonl``, keyed by the problem's store fingerprint), so that an interrupted spread
+    resumes where it stopped."""
     designs = spread_designs(config)
     uplift = {p: get_problem(p).uplift_force(DESIGN_SPEED, config.fidelity) for _, p, _ in designs}
-    jobs, keys = [], []
+    prefix = {p: get_problem(p).store_fingerprint() for _, p, _ in designs}
+    jobs = []
     for label, problem, x in designs:
-        jobs.append((problem, x, None, config.seed, -1, config.fidelity, uplift[problem]))
-        keys.append((label, problem, 0.0, -1))
+        common = (config.seed, config.fidelity, uplift[problem])
+        jobs.append((label, problem, 0.0, -1, x, None, *common))
         for mm, tolerances in zip(config.levels_mm, config.levels(), strict=True):
-            for k in range(config.n_draws):
-                jobs.append((problem, x, tolerances, config.seed, k, config.fidelity, uplift[problem]))
-                keys.append((label, problem, mm, k))
-    results = _map(config, jobs)
-    write_csv(folder / "spread.csv", [_row(*key, ev) for key, ev in zip(keys, results, strict=True)])
+            jobs.extend((label, problem, mm, k, x, tolerances, *common) for k in range(config.n_draws))
+
+    def key(job: tuple[Any, ...]) -> str:
+        label, problem, mm, k, x, _, seed, fidelity, force = job
+        return json.dumps(["spread", prefix[problem], label, mm, k, list(x), seed, fidelity, force])
+
+    log = ResultLog(folder / "log.jsonl")
+    todo = [job for job in jobs if log.get(key(job)) is None]
+    for job, row in _completed(config, spread_row, todo):
+        log.put(key(job), row)
+    write_csv(folder / "spread.csv", [log.get(key(job)) for job in jobs])
 
 
 def run_buildable(config: Config, folder: Path) -> None:

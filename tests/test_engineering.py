@@ -388,6 +388,26 @@ def test_a_tiny_tolerance_study_writes_its_data_and_remakes_its_report(tmp_path)
     assert (folder / "spread.png").stat().st_size > 0
 
 
+def test_an_interrupted_spread_resumes_from_its_log_without_simulating_again(tmp_path, monkeypatch):
+    from experiments import tolerance
+
+    config = tolerance.Config(
+        out=tmp_path, workers=1, draws=2, parts=("spread",), problems=("B1",), levels_mm=(2.0,)
+    )
+    folder = tolerance.main(config)
+    written = (folder / "spread.csv").read_text(encoding="utf-8")
+    log = folder / "log.jsonl"
+    lines = log.read_text(encoding="utf-8").splitlines()
+    assert len(lines) == 2 * 3  # level wire and B1 optimum: nominal and two draws, one line each
+    log.write_text("\n".join(lines[:-2]) + "\n" + lines[-1][:20], encoding="utf-8")  # killed mid-line
+    evaluated = []
+    real = tolerance.evaluate_draw
+    monkeypatch.setattr(tolerance, "evaluate_draw", lambda *job: evaluated.append(job) or real(*job))
+    tolerance.main(config)
+    assert len(evaluated) == 2  # the line cut short and the one after it, nothing else
+    assert (folder / "spread.csv").read_text(encoding="utf-8") == written
+
+
 @pytest.mark.slow  # the real quick study: about a minute
 def test_the_quick_tolerance_study_runs_its_three_parts(tmp_path):
     from experiments import tolerance
