@@ -5,7 +5,9 @@ MATLAB's ``ga`` with integer constraints replaces the user's operators by those 
 Kansal and Mohan, "A real coded genetic algorithm for solving integer and mixed integer optimization
 problems", Applied Mathematics and Computation 212 (2009) 505-518): Laplace crossover, power mutation,
 and a truncation that puts every child on the integers; constraints are handled by a penalty under
-which an infeasible individual ranks below every feasible one. Its generation loop (``stepGA``) is:
+which an infeasible individual ranks below every feasible one, and, while none is feasible, by its total
+constraint violation (:func:`penalty_scores`), so that a run that starts where nothing is feasible closes
+in on the constraints and its stall rule applies. Its generation loop (``stepGA``) is:
 score the population, keep the elite, rank-scale the scores, select parents by stochastic-uniform
 sampling, shuffle them, make ``round(CrossoverFraction × (PopulationSize − EliteCount))`` children by
 crossover of two parents each and the rest by mutation of one parent each.
@@ -48,9 +50,11 @@ __all__ = [
     "elite_indices",
     "integer_truncation",
     "laplace_crossover",
+    "penalty_scores",
     "power_mutation",
     "rank_expectation",
     "stochastic_uniform",
+    "total_violation",
 ]
 
 POPULATION_SIZES: dict[str, int] = {
@@ -118,14 +122,17 @@ class GAOptions:
 # -- operators -------------------------------------------------------------------------------------------
 
 
-def rank_expectation(losses: NDArray[np.float64], n_parents: int) -> NDArray[np.float64]:
+def rank_expectation(
+    losses: NDArray[np.float64], n_parents: int, violations: NDArray[np.float64] | None = None
+) -> NDArray[np.float64]:
     """Rank fitness scaling with the penalty of MATLAB's integer ``ga``: expected parent counts.
 
     MATLAB's ``fitscalingrank``: sort the scores (ties in population order), give the individual of rank
     ``r`` the raw value ``1 / sqrt(r)``, and scale so that the expectations sum to ``n_parents``.
     Infeasible individuals (loss +inf) rank below every feasible one under MATLAB's penalty; here they
     get expectation 0, i.e. they are excluded from selection, as the study asks. If no individual is
-    feasible, all get the same expectation (there is nothing to prefer).
+    feasible, MATLAB's penalty is the total constraint violation alone, so they are ranked by
+    ``violations`` (:func:`penalty_scores`); where those are unknown all get the same expectation.
 
     Parameters
     ----------
@@ -133,6 +140,8 @@ def rank_expectation(losses: NDArray[np.float64], n_parents: int) -> NDArray[np.
         σ, N; +inf for an infeasible individual.
     n_parents : int
         Parents to select.
+    violations : ndarray, shape (n,), optional
+        Each individual's total constraint violation (0 when feasible, NaN where unknown).
 
     Returns
     -------
@@ -142,7 +151,10 @@ def rank_expectation(losses: NDArray[np.float64], n_parents: int) -> NDArray[np.
     feasible = np.isfinite(losses)
     n = len(losses)
     if not np.any(feasible):
-        return np.full(n, n_parents / n)
+        if violations is None or not np.any(np.isfinite(violations)):
+            return np.full(n, n_parents / n)
+        losses = np.where(np.isfinite(violations), violations, np.inf)
+        feasible = np.isfinite(losses)
     ranks = np.empty(n)
     ranks[np.argsort(losses, kind="stable")] = np.arange(1, n + 1)
     raw = np.where(feasible, 1.0 / np.sqrt(ranks), 0.0)
@@ -282,6 +294,22 @@ def power_mutation(
     return np.clip(integer_truncation(mutant, rng), 0, n_levels - 1)
 
 
+def total_violation(constraints: tuple[float, ...]) -> float:
+    """MATLAB's penalty term: the sum of the constraint values above 0 (feasible when all are <= 0); NaN
+    where none is known (a design the simulator could not assess)."""
+    known = [c for c in constraints if np.isfinite(c)]
+    return float(sum(max(c, 0.0) for c in known)) if known else float("nan")
+
+
+def penalty_scores(losses: NDArray[np.float64], violations: NDArray[np.float64]) -> NDArray[np.float64]:
+    """MATLAB's penalty function: a feasible individual's loss; an infeasible one's, the largest feasible loss
+    of the population (0 if none) plus its total violation (+inf where unknown)."""
+    feasible = np.isfinite(losses)
+    worst = float(np.max(losses[feasible])) if np.any(feasible) else 0.0
+    penalised = np.where(np.isfinite(violations), worst + violations, np.inf)
+    return np.where(feasible, losses, penalised)
+
+
 def elite_indices(losses: NDArray[np.float64], count: int) -> NDArray[np.int64]:
     """The ``count`` individuals of lowest loss (ties in population order): copied unchanged (elitism)."""
     return np.argsort(losses, kind="stable")[:count].astype(np.int64)
@@ -343,9 +371,13 @@ class GeneticAlgorithm(Optimizer):
         """Generations completed after the initial population."""
         self.population: NDArray[np.int64] | None = None
         self.losses: NDArray[np.float64] | None = None
+        self.violations = np.zeros(0)
+        """Each individual's total constraint violation (:func:`total_violation`)."""
         self.best_history: list[float] = []
         """Best loss of the initial population and of each generation."""
-        self._elite: tuple[NDArray[np.int64], NDArray[np.float64]] | None = None
+        self.penalty_history: list[float] = []
+        """Best penalty score (:func:`penalty_scores`) of each: MATLAB's stall measure reads it."""
+        self._elite: tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]] | None = None
 
     def _internal_ask(self) -> NDArray[np.int64]:
         if self.population is None:
@@ -353,8 +385,11 @@ class GeneticAlgorithm(Optimizer):
             size = (self.population_size, self.space.n_variables)
             return self.rng.integers(0, self.n_levels, size=size).astype(np.int64)
         assert self.losses is not None
-        elite = elite_indices(self.losses, self.options.elite_count)
-        self._elite = (self.population[elite], self.losses[elite])
+        # The elite by loss; with no feasible individual, by MATLAB's penalty (the smallest violations).
+        feasible = np.any(np.isfinite(self.losses))
+        ranking = self.losses if feasible else penalty_scores(self.losses, self.violations)
+        elite = elite_indices(ranking, self.options.elite_count)
+        self._elite = (self.population[elite], self.losses[elite], self.violations[elite])
         return self._children(self.population, self.losses)
 
     def _children(self, population: NDArray[np.int64], losses: NDArray[np.float64]) -> NDArray[np.int64]:
@@ -363,7 +398,7 @@ class GeneticAlgorithm(Optimizer):
         n_crossover = _round_half_away(self.options.crossover_fraction * n_children)
         n_mutation = n_children - n_crossover
         n_parents = 2 * n_crossover + n_mutation
-        expectation = rank_expectation(losses, n_parents)
+        expectation = rank_expectation(losses, n_parents, self.violations)
         parents = self.rng.permutation(stochastic_uniform(expectation, n_parents, self.rng))
         pairs = parents[: 2 * n_crossover]
         crossover = laplace_crossover(
@@ -376,14 +411,26 @@ class GeneticAlgorithm(Optimizer):
         return np.vstack([crossover, mutation]).astype(np.int64)
 
     def _internal_tell(self, points: NDArray[np.int64], losses: NDArray[np.float64]) -> None:
+        self._internal_tell_constrained(points, losses, ((),) * len(losses))
+
+    def _internal_tell_constrained(
+        self,
+        points: NDArray[np.int64],
+        losses: NDArray[np.float64],
+        constraints: tuple[tuple[float, ...], ...],
+    ) -> None:
+        violations = np.array([total_violation(c) for c in constraints], dtype=np.float64)
         if self._elite is None:
-            self.population, self.losses = points, losses
+            self.population, self.losses, self.violations = points, losses, violations
         else:
             self.population = np.vstack([self._elite[0], points])
             self.losses = np.concatenate([self._elite[1], losses])
+            self.violations = np.concatenate([self._elite[2], violations])
             self.generation += 1
         self.best_history.append(float(np.min(self.losses)))
-        change = average_relative_change(self.best_history, self.options.max_stall_generations)
+        # MATLAB's stall measure follows the penalty: with no feasible individual, the smallest violation.
+        self.penalty_history.append(float(np.min(penalty_scores(self.losses, self.violations))))
+        change = average_relative_change(self.penalty_history, self.options.max_stall_generations)
         if change <= self.options.function_tolerance:
             self._stop_reason = "stall"
         elif self.generation >= self.max_generations:

@@ -27,9 +27,11 @@ from optimizers.ga import (
     elite_indices,
     integer_truncation,
     laplace_crossover,
+    penalty_scores,
     power_mutation,
     rank_expectation,
     stochastic_uniform,
+    total_violation,
 )
 from optimizers.nevergrad_adapters import NevergradOptimizer, NGOpt, ngopt_fault
 from optimizers.synthetic import QuadraticProblem, get_synthetic_problem, simulate_quadratic
@@ -125,6 +127,21 @@ def test_rank_expectation_scales_by_rank_and_excludes_infeasible():
     raw = np.array([1 / np.sqrt(3), 0.0, 1.0, 1 / np.sqrt(2), 0.0])  # 1 / sqrt(rank)
     assert expectation == pytest.approx(10 * raw / raw.sum())
     assert rank_expectation(np.full(4, np.inf), 6) == pytest.approx(np.full(4, 1.5))
+    # No feasible individual: MATLAB's penalty ranks them by their total violation (unknown ones last).
+    violations = np.array([0.5, np.nan, 0.1, 2.0])
+    expectation = rank_expectation(np.full(4, np.inf), 6, violations)
+    raw = np.array([1 / np.sqrt(2), 0.0, 1.0, 1 / np.sqrt(3)])
+    assert expectation == pytest.approx(6 * raw / raw.sum())
+    assert rank_expectation(np.full(2, np.inf), 6, np.full(2, np.nan)) == pytest.approx([3.0, 3.0])
+
+
+def test_the_penalty_is_the_worst_feasible_loss_plus_the_total_violation():
+    assert total_violation((-1.0, 0.25, np.nan, 0.5)) == pytest.approx(0.75)
+    assert total_violation((-1.0,)) == 0.0 and np.isnan(total_violation((np.nan,)))
+    losses = np.array([3.0, np.inf, 1.0, np.inf])
+    scores = penalty_scores(losses, np.array([0.0, 0.5, 0.0, np.nan]))
+    assert scores == pytest.approx([3.0, 3.5, 1.0, np.inf])
+    assert penalty_scores(np.full(2, np.inf), np.array([0.2, 0.1])) == pytest.approx([0.2, 0.1])
 
 
 class _CountingRng:
@@ -255,6 +272,17 @@ def test_ga_finds_the_constrained_optimum_and_stops_by_stall(seed):
     assert result.best_sigma == pytest.approx(sigma_best)
     assert np.allclose(result.best_x, x_best)
     assert any(not record.feasible for record in result.history)  # the constraint was met on the way
+
+
+def test_ga_with_no_feasible_design_closes_in_on_the_constraint_and_stalls():
+    # x1 + x3 <= -0.05 m cannot be met within the bounds (at best -0.04 m): the GA follows MATLAB's penalty,
+    # the smallest violation, to the corner that comes closest, and stops by stall, not by the budget.
+    impossible = dataclasses.replace(QUADRATIC, name="synthetic-impossible", limit=-0.05)
+    result = optimize(impossible, "ga", budget=10_000, seed=0, fidelity="test")
+    assert result.stop_reason == "stall" and result.n_simulations < 10_000
+    assert result.best_x is None and not any(record.feasible for record in result.history)
+    closest = min(record.constraints[0] for record in result.history)
+    assert closest == pytest.approx(0.01)
 
 
 def test_ga_population_sizes_of_the_study():
