@@ -294,6 +294,7 @@ def find_mirror(
     axis: float,
     dense_a: tuple[np.ndarray, np.ndarray],
     rows_b: tuple[SparseRows, SparseRows],
+    codes: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> Mirror | None:
     """The mirror image x → 2 axis - x from span a's internal DOFs onto span b's, if span b's stiffness
     and mass are span a's mirrored; None otherwise.
@@ -301,9 +302,10 @@ def find_mirror(
     DOFs match by node kind, coordinate within the node and design x; the signs (a coordinate along
     the track changes sign, and so does a slope) follow from the stiffness, along its strong entries,
     and both matrices are then checked entry by entry. ``dense_a`` holds K_aa and M_aa, ``rows_b``
-    span b's rows of K and M (its internal DOFs first).
+    span b's rows of K and M (its internal DOFs first); ``codes``, the system's :func:`_dof_codes` where the
+    caller has them (a section of distinct spans compares each with every type).
     """
-    kind, x = _dof_codes(system)
+    kind, x = _dof_codes(system) if codes is None else codes
     if a.size != b.size:
         return None
     microns = np.rint(np.r_[x[a], 2.0 * axis - x[b]] * 1e6).astype(np.int64)
@@ -418,6 +420,7 @@ def reduce_system(system: LinearSystem, cutoff: float, far_cutoff: float | None 
     # From the centre outwards: the interior type's representative is then a central span, the one
     # furthest from the end effects, and its own mirror image where the design is symmetric.
     centre = 0.5 * (len(internal) - 1)
+    codes = _dof_codes(system)
     for s in sorted(range(len(internal)), key=lambda span: abs(span - centre)):
         dofs = internal[s]
         columns = np.r_[dofs, b[coupled[s]]]  # internal, then coupled interface
@@ -434,12 +437,12 @@ def reduce_system(system: LinearSystem, cutoff: float, far_cutoff: float | None 
                 rep = types[span_type[r]]
                 axis = 0.5 * (r + s + 1) * span_length
                 dense = (rep.stiffness_internal, rep.mass_internal)
-                mirror = find_mirror(system, internal[r], dofs, axis, dense, rows)
+                mirror = find_mirror(system, internal[r], dofs, axis, dense, rows, codes)
                 if mirror is not None:
                     eigen = (rep_eigen[0], mirror.apply(rep_eigen[1]))
                     break
             if eigen is None:  # its own mirror image?
-                mirror = find_mirror(system, dofs, dofs, (s + 0.5) * span_length, (K_ii, M_ii), rows)
+                mirror = find_mirror(system, dofs, dofs, (s + 0.5) * span_length, (K_ii, M_ii), rows, codes)
                 eigen = _eigensolution(K_ii, M_ii, mirror)
             representatives.append((s, rows, eigen))
             stiffness = rows[0]
