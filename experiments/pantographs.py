@@ -29,9 +29,10 @@ from typing import Any
 
 import numpy as np
 
-from catenary_env.pipeline import Evaluation, Fidelity, analysis_window, evaluate
+from catenary_env.pipeline import CONSTRAINTS, Evaluation, Fidelity, analysis_window, evaluate
 from catenary_env.problems import get_problem, resolve_fidelity
 from catenary_env.train import Train
+from optimizers.base import OptimizationResult
 from optimizers.catenary_adapter import catenary_problem
 from optimizers.ga import GAOptions
 from optimizers.runner import optimize
@@ -48,6 +49,7 @@ from .common import (
     run_study,
     study_dir,
     write_csv,
+    write_json,
 )
 from .model_stamp import catenaries_of, stamp_study
 
@@ -184,8 +186,9 @@ def beats_level(rows: list[dict]) -> list[dict]:
     return out
 
 
-def worst_design(problem: str, config: Config) -> tuple[float, ...] | None:
-    """Part 2's GA: the problem with a trailing pantograph and the ``worst`` objective; its best design."""
+def worst_design(problem: str, config: Config) -> tuple[tuple[float, ...] | None, dict[str, Any]]:
+    """Part 2's GA: the problem with a trailing pantograph and the ``worst`` objective; its best design (None
+    if it met no feasible one) and a summary of the search (:func:`search_summary`)."""
     result = optimize(
         catenary_problem(problem, train_of(problem, "worst", config.ga_spacing(problem))),
         "ga",
@@ -199,24 +202,40 @@ def worst_design(problem: str, config: Config) -> tuple[float, ...] | None:
         n_workers=config.workers,
         quiet=False,
     )
-    return None if result.best_x is None else tuple(float(v) for v in result.best_x)
+    best = None if result.best_x is None else tuple(float(v) for v in result.best_x)
+    return best, search_summary(result)
+
+
+def search_summary(result: OptimizationResult) -> dict[str, Any]:
+    """What a GA run met: simulations, stop reason, best σ (None when no design was feasible), and the
+    design with the least contact loss of any pantograph (the constraint a trailing pantograph breaks)."""
+    index = CONSTRAINTS.index("contact_loss_percent")
+    known = [r for r in result.history if len(r.constraints) > index and np.isfinite(r.constraints[index])]
+    closest = min(known, key=lambda r: r.constraints[index], default=None)
+    return {
+        "simulations": result.n_simulations,
+        "stop_reason": result.stop_reason,
+        "best_sigma_N": result.best_sigma,
+        "least_contact_loss_percent": None if closest is None else float(closest.constraints[index]),
+        "least_contact_loss_x": None if closest is None else [float(v) for v in closest.x],
+    }
 
 
 def main(config: Config) -> Path:
     folder = study_dir(config.out, NAME)
     write_csv(folder / "optima.csv", optima_table(config))
-    designs, tasks = {}, []
+    designs, searches, tasks = {}, {}, []
     for problem in () if config.optima_only else config.ga_problems:
-        designs[problem] = {
-            "single": single_optimum(config.designs, problem),
-            "worst": worst_design(problem, config),
-        }
+        worst, searches[problem] = worst_design(problem, config)
+        designs[problem] = {"single": single_optimum(config.designs, problem), "worst": worst}
         for label, x in designs[problem].items():
             if x is not None:
                 tasks.extend((problem, label, x, speed) for speed in config.speeds_kmh)
     if tasks:
         write_csv(folder / "speed.csv", _evaluate_all(tasks, config))
         (folder / "designs.json").write_text(json.dumps(designs, indent=1) + "\n", encoding="utf-8")
+    if searches:
+        write_json(folder / "searches.json", searches)
     stamp_study(folder, catenaries_of(config.problems + config.ga_problems))
     report(folder)
     return folder
@@ -237,10 +256,36 @@ def report(folder: Path) -> str:
             ("beats_level_trailing", "beats level (trailing)", ".0f"),
         ],
     )
+    if (folder / "searches.json").exists():
+        table += "\n\n" + _searches_table(json.loads((folder / "searches.json").read_text(encoding="utf-8")))
     (folder / "pantographs.md").write_text(table + "\n", encoding="utf-8")
     if (folder / "speed.csv").exists():
         _figure(read_csv(folder / "speed.csv"), folder / "pantographs.png")
     return table
+
+
+def _searches_table(searches: dict[str, dict[str, Any]]) -> str:
+    """The GA runs for the worse pantograph: what each met (a run may meet no feasible design)."""
+    rows = [
+        {
+            "problem": problem,
+            "simulations": one["simulations"],
+            "stop": one["stop_reason"],
+            "best": "none feasible" if one["best_sigma_N"] is None else f"{one['best_sigma_N']:.2f} N",
+            "least_loss": one["least_contact_loss_percent"],
+        }
+        for problem, one in searches.items()
+    ]
+    return markdown_table(
+        rows,
+        [
+            ("problem", "GA, worse pantograph", "s"),
+            ("simulations", "simulations", ".0f"),
+            ("stop", "stop", "s"),
+            ("best", "best worse-pantograph σ", "s"),
+            ("least_loss", "least contact loss met (%)", ".3f"),
+        ],
+    )
 
 
 def _figure(rows: list[dict], path: Path) -> None:

@@ -84,11 +84,16 @@ def test_the_quick_study_writes_its_data_and_remakes_its_report(tmp_path):
         "optima.csv",
         "speed.csv",
         "designs.json",
+        "searches.json",
         "pantographs.md",
         "pantographs.png",
         "model.json",
     ):
         assert (folder / name).stat().st_size > 0, name
+    searches = json.loads((folder / "searches.json").read_text(encoding="utf-8"))
+    assert set(searches) == set(pantographs.Config().ga_problems)
+    assert all(one["least_contact_loss_percent"] >= 0.0 for one in searches.values())
+    assert "GA, worse pantograph" in (folder / "pantographs.md").read_text(encoding="utf-8")
     speeds = pantographs.read_csv(folder / "speed.csv")
     assert {r["design"] for r in speeds} <= {"single", "worst"}
     assert {r["speed_kmh"] for r in speeds} == set(pantographs.Config().speeds_kmh)
