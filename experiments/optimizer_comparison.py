@@ -206,8 +206,10 @@ def _open_store(path: Path, read_only: bool) -> RunStore:
 
 def _reference_rows(store: RunStore, config: Config, problem: str) -> list[dict[str, Any]]:
     """σ of the problem's reference design (simulated unless stored; with ``from_store``, none if not
-    stored)."""
+    stored); none where the problem cannot express the reference design (B3, SW3)."""
     reference = study_problem(problem).reference_x()
+    if reference is None:
+        return []
     if config.from_store:
         outcome = stored_outcome(store, problem, reference, SPEED_KMH, config.fidelity)
         if outcome is None:

@@ -396,3 +396,13 @@ def test_from_store_finds_a_ppo_run_where_the_study_stores_it(tmp_path, monkeypa
     with RunStore(":memory:") as store, pytest.raises(Opened) as opened:
         optimizer_comparison._run(store, config, "ppo", "B1", 1, "")
     assert optimizer_comparison._prepare(config, "ppo", "B1", 1).identity == opened.value.args[0]
+
+
+def test_a_problem_without_a_reference_design_has_no_reference_row(tmp_path, monkeypatch):
+    """B3 and SW3 cannot express the reference design (their droppers are variables): the comparison simulates
+    no reference there (it asked for a design of NaN before, and stopped at B3)."""
+    _no_simulation(monkeypatch)
+    folder = optimizer_comparison.main(
+        optimizer_comparison.Config(out=tmp_path, problems=("B3",), optimizers=())
+    )
+    assert read_csv(folder / "reference.csv") == []
