@@ -314,23 +314,12 @@ def test_from_store_writes_the_finished_runs_and_simulates_nothing(tmp_path, mon
     _no_simulation(monkeypatch)
     for name in ("optimize", "train_policy"):  # a resumed run would replay without simulating: refuse it too
         monkeypatch.setattr(optimizer_comparison, name, lambda *a, **k: pytest.fail("a run was made"))
-    args = [
-        "--problems",
-        "B1",
-        "--optimizers",
-        "random",
-        "cma",
-        "de",
-        "pso",
-        "--out",
-        str(tmp_path),
-        "--from-store",
-    ]
+    args = "--optimizers random cma de pso --from-store --out".split() + [str(tmp_path)]
     config = config_from(
         optimizer_comparison.Config, study_parser(optimizer_comparison, "x").parse_args(args)
     )
     assert config.from_store  # the option, declared once, as `catenary experiment optimizers` takes it too
-    optimizer_comparison.main(dataclasses.replace(config, problems=(SYNTHETIC,)))
+    optimizer_comparison.main(dataclasses.replace(config, problems=(SYNTHETIC,)))  # (--problems: catalogue)
     assert _store_counts(store) == before  # nothing written to the store: no run started or resumed
 
     runs = {(r["optimizer"], int(r["seed"])): r for r in read_csv(folder / "runs.csv")}
@@ -342,7 +331,9 @@ def test_from_store_writes_the_finished_runs_and_simulates_nothing(tmp_path, mon
     for seed in (0, 1):
         assert (runs[("pso", seed)]["status"], runs[("pso", seed)]["n_simulations"]) == ("not run yet", 0)
     written = (folder / "evaluations.csv").read_text(encoding="utf-8").splitlines()
-    kept = [full_rows[0]] + [r for r in full_rows[1:] if r.split(",")[1:4:2] != ["cma", "1"]]
+    kept = [full_rows[0]] + [
+        r for r in full_rows[1:] if r.split(",")[1:4:2] != ["cma", "1"]
+    ]  # optimizer, seed
     assert written == kept  # the finished runs' rows, as the study wrote them when it made the runs
 
     text = (folder / "optimizers.md").read_text(encoding="utf-8")
