@@ -35,7 +35,12 @@ NGOpt: with nevergrad 1.0.12 and numpy >= 2.3 NGOpt fails where it selects a Met
 DoubleFastGADiscreteOnePlusOne and runs. Where it cannot run, the study records it as "not run" with the
 reason instead of failing.
 
-    python -m experiments.optimizer_comparison [--full] [--workers 2] [--out results]
+With ``--from-store`` the study simulates nothing: it writes these files from the runs that finished in the
+run store (read only, so the lanes of a protocol may be running into it), every other run of the protocol a
+line "not run yet" of ``runs.csv`` with the simulations the store holds of it, and ``optimizers.md`` says
+"Partial: N of M runs".
+
+    python -m experiments.optimizer_comparison [--full] [--workers 2] [--out results] [--from-store]
 """
 
 from __future__ import annotations
