@@ -12,7 +12,9 @@ fixed-target views, ranks with a significance test, computed from the comparison
 - *Ranks*: the optimisers ranked by their final best σ within each block (a problem and a seed: runs
   with the same seed are not paired by anything else, so a block is a replicate, not a matched pair),
   Friedman's test that all mean ranks are equal, and pairwise Wilcoxon signed-rank tests over the blocks
-  with Holm's correction (``scipy.stats``). A run with no feasible design ranks last.
+  with Holm's correction (``scipy.stats``). A run with no feasible design ranks last. The blocks are those
+  where every optimiser compared has a run (:func:`common_blocks`): a partial set of runs (a protocol still
+  running) is ranked on what all optimisers have done, and not at all below :data:`MIN_BLOCKS`.
 - The share of infeasible proposals and the simulation time per run are in the comparison's own table
   (:func:`experiments.optimizer_comparison.summarise`).
 
@@ -33,7 +35,9 @@ import numpy as np
 
 __all__ = [
     "BUDGETS",
+    "MIN_BLOCKS",
     "TARGETS",
+    "common_blocks",
     "ecdf",
     "expected_running_time",
     "fixed_budget_rows",
@@ -51,6 +55,9 @@ TARGETS = (0.01, 0.02, 0.05, 0.10)
 
 ALPHA = 0.05
 """Significance level of the tests."""
+
+MIN_BLOCKS = 2
+"""The fewest blocks (problem, seed) the rank tests are made on (one block ranks, it tests nothing)."""
 
 
 def runtimes(curves: np.ndarray, lengths: Sequence[int], target: float) -> list[tuple[int, bool]]:
@@ -167,7 +174,11 @@ def rank_tests(
     from scipy import stats
 
     names = sorted(finals)
-    blocks = sorted(set.intersection(*(set(finals[n]) for n in names)))
+    blocks = common_blocks(finals)
+    if len(blocks) < MIN_BLOCKS:
+        raise ValueError(
+            f"{len(blocks)} block(s) where every optimiser has a run: the tests need {MIN_BLOCKS}"
+        )
     table = np.array([[finals[n][b] for n in names] for b in blocks])  # blocks x optimisers
     ranks = stats.rankdata(np.where(np.isfinite(table), table, 1e300), axis=1)
     statistic, p_value = stats.friedmanchisquare(*table.T) if len(names) >= 3 else (np.nan, np.nan)
@@ -190,21 +201,34 @@ def rank_tests(
     return friedman, pairs
 
 
-def ecdf_figure(curves: dict[str, np.ndarray], problems: Sequence[str], path: Path) -> None:
-    """The aggregated ECDF of runtimes, one line per optimiser."""
+def common_blocks(finals: dict[str, dict[tuple[str, int], float]]) -> list[tuple[str, int]]:
+    """The blocks ``(problem, seed)`` where every optimiser of ``finals`` (:func:`rank_tests`) has a run."""
+    return sorted(set.intersection(*(set(by_block) for by_block in finals.values()))) if finals else []
+
+
+def ecdf_figure(
+    curves: dict[str, np.ndarray],
+    problems: Sequence[str],
+    path: Path,
+    labels: dict[str, str] | None = None,
+    partial: str = "",
+) -> None:
+    """The aggregated ECDF of runtimes, one line per optimiser (``labels``: its legend entry by name, e.g.
+    with its runs, which differ between optimisers in a partial set; ``partial``: "N of M runs" of such a
+    set, in the title)."""
     from catenary_env.plots import pyplot
 
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.5, 4.2))
     for i, (optimizer, share) in enumerate(sorted(curves.items(), key=lambda item: -item[1][-1])):
-        ax.step(np.arange(1, len(share) + 1), share, where="post", color=f"C{i}", label=optimizer)
+        label = (labels or {}).get(optimizer, optimizer)
+        ax.step(np.arange(1, len(share) + 1), share, where="post", color=f"C{i}", label=label)
     ax.set_xlabel("simulations")
     ax.set_ylabel("share of (problem, target, run) reached")
     ax.set_ylim(0.0, 1.0)
     targets = ", ".join(f"{100 * t:g}" for t in TARGETS)
-    ax.set_title(
-        f"ECDF of runtimes to {targets} % above the best-known σ\n({', '.join(problems)})", fontsize=10
-    )
+    scope = ", ".join(problems) + (f"; partial: {partial} of the protocol" if partial else "")
+    ax.set_title(f"ECDF of runtimes to {targets} % above the best-known σ\n({scope})", fontsize=10)
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)

@@ -55,13 +55,15 @@ def study_dir(out: Path, name: str) -> Path:
 
 
 def write_csv(path: Path, rows: list[dict[str, Any]]) -> None:
-    """Write rows (dicts with the same keys) as CSV; written to a temporary file first, so an
-    interrupted run never leaves a half-written table."""
+    """Write rows (dicts with the same keys) as CSV (no rows: an empty file, which :func:`read_csv` reads
+    back as none); written to a temporary file first, so an interrupted run never leaves a half-written
+    table."""
     tmp = path.with_suffix(path.suffix + ".tmp")
     with open(tmp, "w", newline="", encoding="utf-8") as handle:
-        writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+        if rows:
+            writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
+            writer.writeheader()
+            writer.writerows(rows)
     tmp.replace(path)
 
 

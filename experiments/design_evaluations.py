@@ -40,6 +40,7 @@ __all__ = [
     "evaluate_designs",
     "mean_sigma_problem",
     "simulate_mean_sigma",
+    "stored_outcome",
     "study_problem",
 ]
 
@@ -106,6 +107,15 @@ def evaluate_designs(
                 for position in missing[keys[number]]:
                     outcomes[position] = outcome
     return [outcomes[position] for position in range(len(requests))]
+
+
+def stored_outcome(
+    store: RunStore, problem: str, x: Sequence[float], speed_kmh: float, fidelity: str
+) -> Outcome | None:
+    """The outcome of a design (variables, m) of a problem at a speed (km/h) where any run of the store
+    simulated it, else None: :func:`evaluate_designs` without simulating."""
+    space = GridSpace.from_problem(resolve_problem(problem))
+    return store.lookup(space.store_key, space.design_key(space.snap(x)), float(speed_kmh), fidelity)
 
 
 def study_problem(problem: str) -> DesignProblem | QuadraticProblem:

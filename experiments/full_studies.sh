@@ -12,6 +12,8 @@ set -euo pipefail
 # Each command resumes from OUT/runs.sqlite, so this script can be killed and started again at any time;
 # it takes about 35 hours on two cores (docs/performance.md, 'The full studies' and 'The full protocol of the
 # optimiser benchmark').
+# While the lanes run, `python -m experiments.optimizer_comparison --full --from-store --out "$OUT"` writes the
+# comparison's results so far from the store (the finished runs; the others "not run yet"), simulating nothing.
 # Usage: experiments/full_studies.sh [OUT] [WORKERS]
 OUT="${1:-results}"
 WORKERS="${2:-2}"

@@ -35,7 +35,12 @@ NGOpt: with nevergrad 1.0.12 and numpy >= 2.3 NGOpt fails where it selects a Met
 DoubleFastGADiscreteOnePlusOne and runs. Where it cannot run, the study records it as "not run" with the
 reason instead of failing.
 
-    python -m experiments.optimizer_comparison [--full] [--workers 2] [--out results]
+With ``--from-store`` the study simulates nothing: it writes these files from the runs that finished in the
+run store (read only, so the lanes of a protocol may be running into it), every other run of the protocol a
+line "not run yet" of ``runs.csv`` with the simulations the store holds of it, and ``optimizers.md`` says
+"Partial: N of M runs".
+
+    python -m experiments.optimizer_comparison [--full] [--workers 2] [--out results] [--from-store]
 """
 
 from __future__ import annotations
@@ -44,7 +49,7 @@ import argparse
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -55,8 +60,10 @@ from optimizers.nevergrad_adapters import ngopt_fault
 from optimizers.plugins import get_optimizer
 from optimizers.problem import GridSpace
 from optimizers.problem_registry import resolve_problem
-from optimizers.runner import optimize
-from optimizers.store import RunStore
+from optimizers.recorder import finished_result
+from optimizers.rl import policy_run_config
+from optimizers.runner import optimize, run_config
+from optimizers.store import RunConfig, RunStore, StoreError
 from optimizers.synthetic import SYNTHETIC_PROBLEMS
 
 from . import benchmark_views as bv
@@ -74,10 +81,10 @@ from .common import (
     study_dir,
     write_csv,
 )
-from .design_evaluations import evaluate_designs, study_problem
+from .design_evaluations import evaluate_designs, stored_outcome, study_problem
 from .iohprofiler import runs_from_rows, write_algorithm
 from .model_stamp import catenaries_of, stamp_study
-from .rl_studies import check_starts_at_reference, policy_options, train_policy
+from .rl_studies import check_starts_at_reference, policy_env, policy_options, train_policy
 
 NAME = "optimizers"
 PROBLEMS = ("B1", "SW1")
@@ -94,6 +101,10 @@ TARGET = 0.02
 """Within 2 % of the best σ any run found on the problem."""
 DE_POPULATION = 30
 """The size of nevergrad's DE first population here (its default, the "standard" population)."""
+DONE, NOT_RUN, NOT_RUN_YET = "done", "not run", "not run yet"
+"""The status of a run in ``runs.csv``: finished; cannot run here (the note says why); not finished in the
+store when the results were written from it (``--from-store``: the note and ``n_simulations`` say what the
+store holds of it)."""
 
 
 @dataclass(frozen=True)
@@ -119,6 +130,10 @@ class Config:
         The optimisers run (default all of :data:`OPTIMIZERS`). Two processes given disjoint sets share
         the work of one problem on two cores; the combined results come from one more run over all of
         them, which replays every run from the store.
+    from_store : bool
+        Write the results from the runs that finished in the run store, simulating nothing and starting or
+        resuming no run (the store is only read: lanes may be running into it); every other run of the
+        protocol is a line "not run yet" with the simulations the store holds of it.
     """
 
     full: bool = False
@@ -127,6 +142,7 @@ class Config:
     store: Path | None = None
     problems: tuple[str, ...] = None  # type: ignore[assignment]  (set in __post_init__)
     optimizers: tuple[str, ...] = OPTIMIZERS
+    from_store: bool = False
 
     def __post_init__(self) -> None:
         if self.problems is None:
@@ -166,30 +182,16 @@ def main(config: Config) -> Path:
     evaluation_rows: list[dict[str, Any]] = []
     run_rows: list[dict[str, Any]] = []
     reference_rows: list[dict[str, Any]] = []
-    with RunStore(store_path) as store:
+    with _open_store(store_path, config.from_store) as store:
         for problem in config.problems:
-            reference = study_problem(problem).reference_x()
-            (outcome,) = evaluate_designs(
-                store, problem, [(reference, SPEED_KMH)], config.fidelity, config.workers
-            )
-            reference_rows.append(
-                {
-                    "problem": problem,
-                    "speed_kmh": SPEED_KMH,
-                    "fidelity": config.fidelity,
-                    "sigma_N": outcome.sigma,
-                }
-            )
+            reference_rows += _reference_rows(store, config, problem)
             for optimizer in config.optimizers:
                 for seed in config.seeds_for(problem):
-                    result, note = _run(store, config, optimizer, problem, seed)
-                    if result is None:
-                        run_rows.append(_not_run_row(config, optimizer, problem, seed, note))
-                        continue
-                    rows = _evaluation_rows(store, result, problem)
+                    run_row, rows = _protocol_run(store, config, optimizer, problem, seed)
+                    run_rows.append(run_row)
                     evaluation_rows.extend(rows)
-                    run_rows.append(_run_row(config, result, problem, rows, note))
-                    print(_run_line(run_rows[-1]), file=sys.stderr, flush=True)
+                    if rows and not config.from_store:
+                        print(_run_line(run_row), file=sys.stderr, flush=True)
     write_csv(folder / "evaluations.csv", evaluation_rows)
     write_csv(folder / "runs.csv", run_rows)
     write_csv(folder / "reference.csv", reference_rows)
@@ -198,28 +200,98 @@ def main(config: Config) -> Path:
     return folder
 
 
-def _run(
-    store: RunStore, config: Config, optimizer: str, problem: str, seed: int
-) -> tuple[OptimizationResult | None, str]:
-    """One run (resumed from the store), or None and why it cannot run here."""
+def _open_store(path: Path, read_only: bool) -> RunStore:
+    """The run store; read only with ``--from-store`` (runs may be writing into it), which needs one."""
+    if read_only and not Path(path).is_file():
+        raise StoreError(
+            f"{path}: no run store here; --from-store writes the results of the runs a store holds"
+        )
+    return RunStore(path, read_only=read_only)
+
+
+def _reference_rows(store: RunStore, config: Config, problem: str) -> list[dict[str, Any]]:
+    """σ of the problem's reference design (simulated unless stored; with ``from_store``, none if not
+    stored); none where the problem cannot express the reference design (B3, SW3)."""
+    reference = study_problem(problem).reference_x()
+    if reference is None:
+        return []
+    if config.from_store:
+        outcome = stored_outcome(store, problem, reference, SPEED_KMH, config.fidelity)
+        if outcome is None:
+            return []
+    else:
+        (outcome,) = evaluate_designs(
+            store, problem, [(reference, SPEED_KMH)], config.fidelity, config.workers
+        )
+    return [
+        {"problem": problem, "speed_kmh": SPEED_KMH, "fidelity": config.fidelity, "sigma_N": outcome.sigma}
+    ]
+
+
+class _Prepared(NamedTuple):
+    """A run of the protocol before it is made: its identity in the store (None: it cannot run here),
+    the note of its line (why it cannot run), and its problem's grid."""
+
+    identity: RunConfig | None
+    note: str
+    space: GridSpace
+
+
+def _prepare(config: Config, optimizer: str, problem: str, seed: int) -> _Prepared:
+    """The run's identity and note, or why it cannot run here; nothing is simulated."""
+    space = GridSpace.from_problem(resolve_problem(problem))
     options = config.options(optimizer)
     if optimizer == "ppo":
         try:  # the policy starts at the reference design only where the bounds are centred on it
             check_starts_at_reference(problem)
         except ValueError as error:
-            return None, str(error)
-        _, result = train_policy(
-            store, problem, config.budget, seed, options, config.fidelity, speed_kmh=SPEED_KMH,
-            quiet=not config.full,
-        )  # fmt: skip
-        return result, "PPO, spread 4 mm around the reference design"
-    space = GridSpace.from_problem(resolve_problem(problem))
+            return _Prepared(None, str(error), space)
+        identity = policy_run_config(
+            policy_env(problem, config.fidelity, SPEED_KMH), space, config.budget, seed, options
+        )
+        return _Prepared(identity, "PPO, spread 4 mm around the reference design", space)
     spec = get_optimizer(optimizer)
     try:  # built once before the run, so that an optimiser that cannot run leaves no run in the store
         engine = spec.optimizer_class(space, config.budget, seed, options)  # type: ignore[call-arg]
     except (ImportError, RuntimeError) as error:
-        return None, str(error)
+        return _Prepared(None, str(error), space)
     note = f"NGOpt selected {engine.selected_optimizer}" if optimizer == "ngopt" else ""
+    identity = run_config(optimizer, space, config.budget, seed, SPEED_KMH, config.fidelity, options)
+    return _Prepared(identity, note, space)
+
+
+def _protocol_run(
+    store: RunStore, config: Config, optimizer: str, problem: str, seed: int
+) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """The line of runs.csv of one run of the protocol and its evaluations' rows: made (or resumed), or
+    with ``from_store`` read from the store where it finished there, else a line "not run yet"."""
+    prepared = _prepare(config, optimizer, problem, seed)
+    if prepared.identity is None:
+        return _not_run_row(config, optimizer, problem, seed, prepared.note), []
+    note = prepared.note
+    if config.from_store:
+        result, held, pending = _stored_run(store, prepared.identity, prepared.space)
+        if result is None:
+            return _not_run_row(config, optimizer, problem, seed, pending, NOT_RUN_YET, held), []
+    else:
+        result, note = _run(store, config, optimizer, problem, seed, note)
+        if result is None:
+            return _not_run_row(config, optimizer, problem, seed, note), []
+    rows = _evaluation_rows(store, result, problem)
+    return _run_row(config, result, problem, rows, note), rows
+
+
+def _run(
+    store: RunStore, config: Config, optimizer: str, problem: str, seed: int, note: str
+) -> tuple[OptimizationResult | None, str]:
+    """One run (resumed from the store) and its note, or None and why it failed."""
+    options = config.options(optimizer)
+    if optimizer == "ppo":
+        _, result = train_policy(
+            store, problem, config.budget, seed, options, config.fidelity, speed_kmh=SPEED_KMH,
+            quiet=not config.full,
+        )  # fmt: skip
+        return result, note
     try:
         result = optimize(
             problem, optimizer, config.budget, seed, speed_kmh=SPEED_KMH, fidelity=config.fidelity,
@@ -232,6 +304,27 @@ def _run(
             raise
         return None, f"failed part-way ({error}): {fault}"
     return result, note
+
+
+def _stored_run(
+    store: RunStore, identity: RunConfig, space: GridSpace
+) -> tuple[OptimizationResult | None, int, str]:
+    """A run read from the store: its result where it finished there (nothing replayed by its optimiser,
+    nothing simulated); else None, the simulations the store holds of it, and a note saying so."""
+    try:
+        run_id = store.find_run(identity)
+    except StoreError as error:  # a run of another package version: a resumption would refuse it too
+        return None, 0, str(error)
+    if run_id is None:
+        return None, 0, "no simulation in the store"
+    if store.stop_reason(run_id) is None:
+        held = sum(int(s.record.charged) for s in store.evaluations(run_id).values())
+        return (
+            None,
+            held,
+            f"run {run_id} unfinished: {held} of its {identity.budget} simulations in the store",
+        )
+    return finished_result(store, run_id, identity, space), 0, ""
 
 
 def _evaluation_rows(store: RunStore, result: OptimizationResult, problem: str) -> list[dict[str, Any]]:
@@ -280,7 +373,7 @@ def _run_row(
         "seed": result.seed,
         "budget": result.budget,
         "fidelity": config.fidelity,
-        "status": "done",
+        "status": DONE,
         "stop_reason": result.stop_reason,
         "n_simulations": result.n_simulations,
         "n_evaluations": len(rows),
@@ -291,7 +384,12 @@ def _run_row(
     }
 
 
-def _not_run_row(config: Config, optimizer: str, problem: str, seed: int, reason: str) -> dict[str, Any]:
+def _not_run_row(
+    config: Config, optimizer: str, problem: str, seed: int, reason: str, status: str = NOT_RUN,
+    held: int = 0,
+) -> dict[str, Any]:  # fmt: skip
+    """The line of a run that cannot run here (``NOT_RUN``), or has not finished in the store
+    (``NOT_RUN_YET``, with the ``held`` simulations the store holds of it)."""
     return {
         "run": "",
         "optimizer": optimizer,
@@ -299,9 +397,9 @@ def _not_run_row(config: Config, optimizer: str, problem: str, seed: int, reason
         "seed": seed,
         "budget": config.budget,
         "fidelity": config.fidelity,
-        "status": "not run",
+        "status": status,
         "stop_reason": "",
-        "n_simulations": 0,
+        "n_simulations": held,
         "n_evaluations": 0,
         "best_sigma_N": float("nan"),
         "infeasible_share": float("nan"),
@@ -353,9 +451,9 @@ def summarise(
     by_run: dict[Any, list[dict[str, Any]]] = {}
     for row in evaluations:
         by_run.setdefault(int(row["run"]), []).append(row)
-    done = [r for r in runs if r["status"] == "done"]
+    done = [r for r in runs if r["status"] == DONE]
     summary, curves_by = [], {}
-    for problem in dict.fromkeys(r["problem"] for r in runs):
+    for problem in dict.fromkeys(r["problem"] for r in done):  # problems without a finished run: no rows
         pruns = [r for r in done if r["problem"] == problem]
         budget = int(max((r["budget"] for r in pruns), default=1))
         curves = {int(r["run"]): best_so_far(by_run.get(int(r["run"]), []), budget) for r in pruns}
@@ -405,6 +503,7 @@ def report(folder: Path) -> str:
     runs = read_csv(folder / "runs.csv")
     reference = {r["problem"]: r["sigma_N"] for r in read_csv(folder / "reference.csv")}
     summary, curves = summarise(evaluations, runs, reference)
+    partial = partial_share(runs)
     write_csv(folder / "summary.csv", summary)
     for row in summary:
         row["final"] = f"{row['median_sigma_N']:.2f} [{row['q25_sigma_N']:.2f}, {row['q75_sigma_N']:.2f}]"
@@ -426,17 +525,56 @@ def report(folder: Path) -> str:
     notes = [f"- reference design: σ = {s:.2f} N on {p}" for p, s in reference.items()]
     if any(not np.isfinite(r["q75_sigma_N"]) for r in summary):
         notes.append("- nan: the quantile falls on a run that found no feasible design")
-    done = [r for r in runs if r["status"] == "done"]
+    done = [r for r in runs if r["status"] == DONE]
     notes += sorted({f"- {r['optimizer']}: {r['note']}" for r in done if r["note"]})
     notes += sorted(
-        {f"- {r['optimizer']} on {r['problem']}: not run: {r['note']}" for r in runs if r not in done}
+        {
+            f"- {r['optimizer']} on {r['problem']}: not run: {r['note']}"
+            for r in runs
+            if r["status"] == NOT_RUN
+        }
     )
-    notes += identical_histories(evaluations, runs)
-    text = table + "\n\n" + "\n".join(notes) + "\n\n" + views(folder, curves, runs)
+    notes += identical_histories(evaluations, runs) + not_run_yet(runs)
+    heading = (
+        f"Partial: {partial} of the protocol finished (written from the run store while it runs); every "
+        "table, figure and test here is of those runs only."
+        if partial
+        else ""
+    )
+    parts = [heading, table, "\n".join(notes), views(folder, curves, runs, partial)]
+    text = "\n\n".join(part for part in parts if part)
     (folder / "optimizers.md").write_text(text + "\n", encoding="utf-8")
-    _figure(curves, reference, folder / "convergence.png")
+    _figure(curves, reference, folder / "convergence.png", partial)
     _write_ioh(folder / "ioh", evaluations, runs)
     return text
+
+
+def partial_share(runs: list[dict[str, Any]]) -> str:
+    """The share of the protocol in ``runs.csv``, "N of M runs", where some runs are not run yet (results
+    written from the store while the protocol runs, ``--from-store``), else ""; M leaves out the runs that
+    cannot run here."""
+    pending = sum(r["status"] == NOT_RUN_YET for r in runs)
+    done = sum(r["status"] == DONE for r in runs)
+    return f"{done} of {done + pending} runs" if pending else ""
+
+
+def not_run_yet(runs: list[dict[str, Any]]) -> list[str]:
+    """Notes on the runs not run yet, per problem: how many of each optimiser, and the simulations the store
+    holds of them (``runs.csv`` has them seed by seed)."""
+    pending: dict[str, dict[str, list[int]]] = {}
+    for r in runs:
+        if r["status"] == NOT_RUN_YET:
+            pending.setdefault(r["problem"], {}).setdefault(r["optimizer"], []).append(
+                int(r["n_simulations"])
+            )
+    notes = []
+    for problem, by_optimizer in pending.items():
+        parts = [
+            f"{optimizer} {len(held)}" + (f" ({sum(held)} simulations in the store)" if sum(held) else "")
+            for optimizer, held in by_optimizer.items()
+        ]
+        notes.append(f"- not run yet on {problem} (runs of each optimiser): " + ", ".join(parts))
+    return notes
 
 
 def identical_histories(evaluations: list[dict[str, Any]], runs: list[dict[str, Any]]) -> list[str]:
@@ -445,7 +583,7 @@ def identical_histories(evaluations: list[dict[str, Any]], runs: list[dict[str, 
     designs: dict[tuple[str, str, int], list[str]] = {}
     for row in evaluations:
         designs.setdefault((row["optimizer"], row["problem"], int(row["seed"])), []).append(str(row["x_m"]))
-    names = list(dict.fromkeys(r["optimizer"] for r in runs if r["status"] == "done"))
+    names = list(dict.fromkeys(r["optimizer"] for r in runs if r["status"] == DONE))
     notes = []
     for i, a in enumerate(names):
         for b in names[i + 1 :]:
@@ -461,10 +599,17 @@ def identical_histories(evaluations: list[dict[str, Any]], runs: list[dict[str, 
     return notes
 
 
-def views(folder: Path, curves: dict[str, dict[str, np.ndarray]], runs: list[dict[str, Any]]) -> str:
+def views(
+    folder: Path, curves: dict[str, dict[str, np.ndarray]], runs: list[dict[str, Any]], partial: str = ""
+) -> str:
     """The fixed-budget, fixed-target and rank views (:mod:`experiments.benchmark_views`); writes
-    ``fixed_budget.csv``, ``fixed_target.csv``, ``ranks.csv`` and ``ecdf.png``; returns their Markdown."""
-    done = [r for r in runs if r["status"] == "done"]
+    ``fixed_budget.csv``, ``fixed_target.csv``, ``ranks.csv`` and ``ecdf.png`` (removing those an earlier
+    write left where the runs give none); returns their Markdown, each heading with ``partial``
+    (:func:`partial_share`) where it is not empty."""
+    for name in ("fixed_target.csv", "ranks.csv", "ecdf.png"):
+        (folder / name).unlink(missing_ok=True)
+    suffix = f" (partial: {partial})" if partial else ""
+    done = [r for r in runs if r["status"] == DONE]
     lengths: dict[str, dict[str, list[int]]] = {}
     finals: dict[str, dict[tuple[str, int], float]] = {}
     for r in done:  # in the order of summarise's curves
@@ -481,7 +626,7 @@ def views(folder: Path, curves: dict[str, dict[str, np.ndarray]], runs: list[dic
     budget_rows = bv.fixed_budget_rows(curves)
     target_rows = bv.fixed_target_rows(curves, lengths, best)
     write_csv(folder / "fixed_budget.csv", budget_rows)
-    parts = ["### Fixed budget: best σ (N), median [IQR] of the runs", markdown_table(
+    parts = [f"### Fixed budget: best σ (N), median [IQR] of the runs{suffix}", markdown_table(
         budget_rows, [("problem", "problem", "s"), ("optimizer", "optimiser", "s"), ("runs", "runs", "d")]
         + [(k, f"after {k[3:]} simulations", "s") for k in budget_rows[0] if k.startswith("at_")],
     )] if budget_rows else []  # fmt: skip
@@ -490,12 +635,16 @@ def views(folder: Path, curves: dict[str, dict[str, np.ndarray]], runs: list[dic
         columns = [("problem", "problem", "s"), ("optimizer", "optimiser", "s")]
         columns += [(f"cell_{100 * t:g}", f"ERT to {100 * t:g} % (runs reached)", "s") for t in bv.TARGETS]
         targets = ", ".join(f"{p} {s:.2f} N" for p, s in best.items())
-        parts += [f"### Fixed target: simulations to come within x % of the best-known σ ({targets})",
+        parts += [f"### Fixed target: simulations to come within x % of the best-known σ ({targets}){suffix}",
                   markdown_table(target_rows, columns)]  # fmt: skip
         budget = int(max(int(r["budget"]) for r in done))
-        bv.ecdf_figure(bv.ecdf(curves, lengths, best, budget), list(best), folder / "ecdf.png")
+        runs_in = {o: sum(len(lengths[p].get(o, [])) for p in best) for o in finals}
+        labels = {o: f"{o} ({n} runs)" for o, n in runs_in.items()}
+        bv.ecdf_figure(
+            bv.ecdf(curves, lengths, best, budget), list(best), folder / "ecdf.png", labels, partial
+        )
     if len(finals) >= 3:
-        parts.append(_rank_section(folder, finals))
+        parts.append(_rank_section(folder, finals, suffix))
     return "\n\n".join(parts)
 
 
@@ -510,14 +659,22 @@ def _best_known(curves: dict[str, Any], done: list[dict[str, Any]]) -> dict[str,
     return best
 
 
-def _rank_section(folder: Path, finals: dict[str, dict[tuple[str, int], float]]) -> str:
+def _rank_section(folder: Path, finals: dict[str, dict[tuple[str, int], float]], suffix: str) -> str:
+    """The rank tests over the blocks (problem, seed) where every optimiser has a finished run; none where
+    fewer than :data:`~experiments.benchmark_views.MIN_BLOCKS` are (a partial set)."""
+    blocks = bv.common_blocks(finals)
+    if len(blocks) < bv.MIN_BLOCKS:
+        return (
+            f"### Ranks{suffix}\n\nnot computed: the {len(finals)} optimisers have finished runs in common "
+            f"on {len(blocks)} block(s) (problem, seed), fewer than {bv.MIN_BLOCKS}"
+        )
     friedman, pairs = bv.rank_tests(finals)
     write_csv(folder / "ranks.csv", pairs)
     ranks = sorted(friedman["mean_ranks"].items(), key=lambda item: item[1])
     significant = [f"{p['better']} better than {p['b'] if p['better'] == p['a'] else p['a']} "
                    f"(p = {p['p_holm']:.3f})" for p in pairs if p["significant"]]  # fmt: skip
     return "\n".join([
-        f"### Ranks over {friedman['blocks']} blocks (problem, seed) by final best σ",
+        f"### Ranks over {friedman['blocks']} blocks (problem, seed) by final best σ{suffix}",
         "",
         "mean rank (1 = best): " + ", ".join(f"{name} {rank:.2f}" for name, rank in ranks),
         "",
@@ -527,11 +684,20 @@ def _rank_section(folder: Path, finals: dict[str, dict[tuple[str, int], float]])
     ])  # fmt: skip
 
 
-def _figure(curves: dict[str, dict[str, np.ndarray]], reference: dict[str, float], path: Path) -> None:
+def _figure(
+    curves: dict[str, dict[str, np.ndarray]], reference: dict[str, float], path: Path, partial: str = ""
+) -> None:
+    """Best σ so far against simulations, one panel per problem with finished runs (``partial``: "N of M
+    runs" of a partial set, in the title); none (an earlier one removed) before the first run finished."""
     from catenary_env.plots import pyplot
 
+    path.unlink(missing_ok=True)
+    if not curves:
+        return
     plt = pyplot()
     fig, axes = plt.subplots(1, len(curves), figsize=(5.5 * len(curves), 4.2), squeeze=False)
+    if partial:
+        fig.suptitle(f"partial: {partial} of the protocol", fontsize=10)
     for ax, (problem, by_optimizer) in zip(axes[0], curves.items(), strict=True):
         for i, (optimizer, stack) in enumerate(by_optimizer.items()):
             q25, median, q75 = quantiles(stack)
@@ -552,7 +718,7 @@ def _figure(curves: dict[str, dict[str, np.ndarray]], reference: dict[str, float
 def _write_ioh(root: Path, evaluations: list[dict[str, Any]], runs: list[dict[str, Any]]) -> None:
     # IOHprofiler's function id: the problem's place in the catalogue, the synthetic problems after it
     function_ids = {name: number for number, name in enumerate([*DESIGN_PROBLEMS, *SYNTHETIC_PROBLEMS], 1)}
-    done = [r for r in runs if r["status"] == "done"]
+    done = [r for r in runs if r["status"] == DONE]
     for problem in dict.fromkeys(r["problem"] for r in done):
         dimension = study_problem(problem).n_variables
         for optimizer in dict.fromkeys(r["optimizer"] for r in done if r["problem"] == problem):
@@ -602,6 +768,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_workers_option(parser, 1, "the simulations of a batch (PPO steps its env in this process)")
     add_out_option(parser)
     add_store_option(parser)
+    parser.add_argument(
+        "--from-store", action="store_true",
+        help="simulate nothing: write the tables, figures and IOHprofiler files from the runs of the "
+        "protocol that finished in the store (read only, so lanes may be running into it), and list every "
+        "other run as 'not run yet' with the simulations the store holds of it",
+    )  # fmt: skip
 
 
 def cli(argv: list[str] | None = None) -> int:

@@ -120,11 +120,21 @@ def train_policy(
 
     check_starts_at_reference(problem)
     register_envs()
-    spec = EnvSpec(f"Catenary-{problem}-v0", None if speed_range else speed_kmh, speed_range, fidelity)
     return train_design_policy(
-        spec, catenary_problem(problem), budget, seed, options=options, store=store, resume=True,
-        start_if_none=True, quiet=quiet,
+        policy_env(problem, fidelity, speed_kmh, speed_range), catenary_problem(problem), budget, seed,
+        options=options, store=store, resume=True, start_if_none=True, quiet=quiet,
     )  # fmt: skip
+
+
+def policy_env(
+    problem: str,
+    fidelity: str,
+    speed_kmh: float | None = SPEED_KMH,
+    speed_range: tuple[float, float] | None = None,
+) -> EnvSpec:
+    """The env :func:`train_policy` trains on: ``Catenary-{problem}-v0`` at a speed (km/h) or over a
+    range of speeds."""
+    return EnvSpec(f"Catenary-{problem}-v0", None if speed_range else speed_kmh, speed_range, fidelity)
 
 
 @dataclass(frozen=True)

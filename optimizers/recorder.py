@@ -18,7 +18,7 @@ from .base import EvaluationRecord, OptimizationResult, best_record
 from .problem import GridSpace
 from .store import RunConfig, RunStore, StoredEvaluation, StoreError
 
-__all__ = ["RunRecorder", "open_run", "options_json", "package_version"]
+__all__ = ["RunRecorder", "finished_result", "open_run", "options_json", "package_version"]
 
 
 def package_version() -> str:
@@ -176,24 +176,46 @@ class RunRecorder:
     def result(self, stop_reason: str) -> OptimizationResult:
         """Mark the run finished in the store and return its result."""
         self.store.finish_run(self.run_id, stop_reason)
-        best = best_record(self.history)
         self._show(self.n_charged, len(self.history), force=True)
         self.progress.finish(f"stopped ({stop_reason})")
-        config = self.config
-        return OptimizationResult(
-            optimizer=config.optimizer,
-            problem=config.problem,
-            variable_names=self.space.variable_names,
-            budget=config.budget,
-            seed=config.seed,
-            speed_kmh=config.speed_kmh,
-            fidelity=config.fidelity,
-            best_x=None if best is None else best.x,
-            best_sigma=None if best is None else best.sigma,
-            feasible=best is not None,
-            history=tuple(self.history),
-            stop_reason=stop_reason,
-            n_simulations=self.n_charged,
-            run_id=self.run_id,
-            best_speed_kmh=None if best is None else best.speed_kmh,
-        )
+        return _result(self.config, self.space, self.run_id, self.history, stop_reason)
+
+
+def finished_result(store: RunStore, run_id: int, config: RunConfig, space: GridSpace) -> OptimizationResult:
+    """The result of a run that finished in the store (its stop reason recorded), read back without replaying
+    its optimiser: the same result its resumption would return, every stored evaluation in order.
+
+    Raises
+    ------
+    StoreError
+        The run has not finished, or its evaluations have gaps (a damaged store).
+    """
+    stop_reason = store.stop_reason(run_id)
+    stored = store.evaluations(run_id)
+    if stop_reason is None or list(stored) != list(range(len(stored))):
+        why = "has not finished" if stop_reason is None else "has gaps in its evaluations"
+        raise StoreError(f"{store.path}: run {run_id} {why}: it cannot be read back as a finished run")
+    return _result(config, space, run_id, [s.record for s in stored.values()], str(stop_reason))
+
+
+def _result(
+    config: RunConfig, space: GridSpace, run_id: int, history: list[EvaluationRecord], stop_reason: str
+) -> OptimizationResult:
+    best = best_record(history)
+    return OptimizationResult(
+        optimizer=config.optimizer,
+        problem=config.problem,
+        variable_names=space.variable_names,
+        budget=config.budget,
+        seed=config.seed,
+        speed_kmh=config.speed_kmh,
+        fidelity=config.fidelity,
+        best_x=None if best is None else best.x,
+        best_sigma=None if best is None else best.sigma,
+        feasible=best is not None,
+        history=tuple(history),
+        stop_reason=stop_reason,
+        n_simulations=sum(int(record.charged) for record in history),
+        run_id=run_id,
+        best_speed_kmh=None if best is None else best.speed_kmh,
+    )

@@ -85,6 +85,7 @@ __all__ = [
     "design_for_speed",
     "import_stable_baselines3",
     "load_policy",
+    "policy_run_config",
     "save_policy",
     "train_design_policy",
 ]
@@ -539,15 +540,7 @@ def train_design_policy(
             "stepped at once"
         )
     space = GridSpace.from_problem(problem)
-    learner_options = dataclasses.asdict(settings)
-    if settings.n_envs == 1:  # a run on one env keeps the identity it had before vector envs
-        del learner_options["n_envs"]
-    run_options = {"env": env_spec.as_dict(), name: learner_options}
-    speed = None if env_spec.speed_range is not None else env_spec.speed_kmh
-    config = RunConfig(
-        name, space.store_key, int(budget), int(seed), speed, env_spec.fidelity,
-        json.dumps(run_options, sort_keys=True), package_version(),
-    )  # fmt: skip
+    config = policy_run_config(env_spec, space, budget, seed, settings)
     with ExitStack() as stack:
         run_store = (
             store if isinstance(store, RunStore) else stack.enter_context(RunStore(store or ":memory:"))
@@ -577,6 +570,22 @@ def train_design_policy(
         result = recorder.result("budget")
         scaling = _observation_scaling(vec_env) if settings.normalize_observation else None
     return DesignPolicy(model, env_spec, scaling), result
+
+
+def policy_run_config(
+    env_spec: EnvSpec, space: GridSpace, budget: int, seed: int, options: LearnerOptions
+) -> RunConfig:
+    """The identity in the store of the run :func:`train_design_policy` makes with these arguments, so that
+    a reader finds the run without training."""
+    learner_options = dataclasses.asdict(options)
+    if options.n_envs == 1:  # a run on one env keeps the identity it had before vector envs
+        del learner_options["n_envs"]
+    run_options = {"env": env_spec.as_dict(), learner_name(options): learner_options}
+    speed = None if env_spec.speed_range is not None else env_spec.speed_kmh
+    return RunConfig(
+        learner_name(options), space.store_key, int(budget), int(seed), speed, env_spec.fidelity,
+        json.dumps(run_options, sort_keys=True), package_version(),
+    )  # fmt: skip
 
 
 def _sac(sb3: Any, vec_env: Any, settings: SACOptions, seed: int) -> Any:

@@ -42,7 +42,7 @@ from .problem_registry import resolve_problem
 from .recorder import RunRecorder, open_run, options_json, package_version
 from .store import RunConfig, RunStore
 
-__all__ = ["optimize"]
+__all__ = ["optimize", "run_config"]
 
 
 def optimize(
@@ -107,16 +107,7 @@ def optimize(
         raise TypeError(
             f"{optimizer}: options must be a {spec.options_class.__name__}, got {type(settings).__name__}"
         )
-    config = RunConfig(
-        optimizer,
-        space.store_key,
-        int(budget),
-        int(seed),
-        float(speed_kmh),
-        fidelity,
-        options_json(settings),
-        package_version(),
-    )
+    config = run_config(optimizer, space, budget, seed, speed_kmh, fidelity, settings)
     cap = 10 * int(budget) if max_evaluations is None else int(max_evaluations)
     with ExitStack() as stack:
         run_store = (
@@ -136,6 +127,17 @@ def optimize(
         loop = _BatchEvaluator(grid_problem, space, recorder, backend, cap)
         stop_reason = _run(engine, loop, recorder, int(budget), cap)
         return recorder.result(stop_reason)
+
+
+def run_config(
+    optimizer: str, space: GridSpace, budget: int, seed: int, speed_kmh: float, fidelity: str, settings: Any
+) -> RunConfig:
+    """The identity in the store of the run :func:`optimize` makes with these arguments (``settings``: the
+    optimiser's options), so that a reader finds the run without making it."""
+    return RunConfig(
+        optimizer, space.store_key, int(budget), int(seed), float(speed_kmh), fidelity,
+        options_json(settings), package_version(),
+    )  # fmt: skip
 
 
 def _run(engine: Optimizer, loop: _BatchEvaluator, recorder: RunRecorder, budget: int, cap: int) -> str:

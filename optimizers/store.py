@@ -320,6 +320,11 @@ class RunStore:
                 (_now(), stop_reason, run_id),
             )
 
+    def stop_reason(self, run_id: int) -> str | None:
+        """Why a run ended (:meth:`finish_run`), or None while it has not ended (or there is no such run)."""
+        row = self._connection.execute("SELECT stop_reason FROM runs WHERE run_id = ?", (run_id,)).fetchone()
+        return None if row is None or row[0] is None else str(row[0])
+
     def runs(self) -> list[dict[str, object]]:
         """Every run as a dict of its columns, oldest first."""
         cursor = self._connection.execute("SELECT * FROM runs ORDER BY run_id")

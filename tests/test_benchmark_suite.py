@@ -111,6 +111,38 @@ def test_ranks_find_a_clear_winner_and_the_ecdf_counts_targets():
     assert shares["a"].tolist() == [0.0, 1.0, 1.0]
 
 
+def test_ranks_of_an_unequal_set_are_those_of_the_blocks_every_optimiser_has():
+    """A partial set of runs (a protocol still running): an optimiser with fewer runs, one problem that only
+    some optimisers reached. The tests are made on the common blocks and are the same as on those alone;
+    with fewer than MIN_BLOCKS of them, none are made."""
+    blocks = [("P", seed) for seed in range(6)]
+    full = {"good": {b: 1.0 + 0.01 * b[1] for b in blocks}, "mid": {b: 2.0 + 0.02 * b[1] for b in blocks},
+            "bad": {b: 3.0 - 0.01 * b[1] for b in blocks}}  # fmt: skip
+    unequal = {name: dict(by_block) for name, by_block in full.items()}
+    for seed in (4, 5):  # "mid" has not finished these runs yet
+        del unequal["mid"][("P", seed)]
+    unequal["good"][("Q", 0)] = unequal["bad"][("Q", 0)] = 0.5  # a second problem reached by two of the three
+    common = [("P", seed) for seed in range(4)]
+    assert bv.common_blocks(unequal) == common
+    restricted = {name: {b: by_block[b] for b in common} for name, by_block in unequal.items()}
+    assert bv.rank_tests(unequal) == bv.rank_tests(restricted)
+    assert bv.rank_tests(unequal)[0]["blocks"] == 4
+    del unequal["mid"][("P", 1)], unequal["mid"][("P", 2)], unequal["mid"][("P", 3)]
+    assert bv.common_blocks(unequal) == [("P", 0)] and bv.common_blocks({}) == []
+    with pytest.raises(ValueError, match="1 block"):
+        bv.rank_tests(unequal)
+
+
+def test_the_fixed_budget_and_target_views_read_each_optimisers_own_runs():
+    """Unequal numbers of runs and lengths (a partial set): each row counts its own runs, an ERT its own."""
+    curves = {"P": {"a": np.array([[3.0, 1.0, 1.0], [4.0, 4.0, 2.0]]), "b": np.array([[2.0, 2.0, 2.0]])}}
+    lengths = {"P": {"a": [3, 3], "b": [3]}}
+    assert [(r["optimizer"], r["runs"]) for r in bv.fixed_budget_rows(curves)] == [("a", 2), ("b", 1)]
+    rows = {r["optimizer"]: r for r in bv.fixed_target_rows(curves, lengths, {"P": 1.0})}
+    assert (rows["a"]["reached_10"], rows["a"]["ert_10"]) == ("1/2", 5.0)  # 2 + 3 simulations over 1 success
+    assert (rows["b"]["reached_10"], rows["b"]["ert_10"]) == ("0/1", math.inf)
+
+
 # -- the dataset export and the ioh wrapper -------------------------------------------------------------
 
 

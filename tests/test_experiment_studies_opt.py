@@ -8,8 +8,10 @@ quick settings (the "test" fidelity, budgets of about ten simulations, PPO) are 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import shutil
+import sqlite3
 from pathlib import Path
 
 import numpy as np
@@ -22,9 +24,10 @@ pytest.importorskip("stable_baselines3", reason="PPO comes from stable-baselines
 
 from catenary_env.problems.design_problem import DesignProblem  # noqa: E402
 from experiments import optimizer_comparison, rl_studies  # noqa: E402
-from experiments.common import read_csv  # noqa: E402
+from experiments.common import config_from, read_csv, study_parser  # noqa: E402
 from experiments.iohprofiler import INFEASIBLE_Y, IOHRun, evaluation_lines, read_dat  # noqa: E402
 from optimizers import synthetic  # noqa: E402
+from optimizers.store import RunStore, StoreError  # noqa: E402
 from optimizers.synthetic import get_synthetic_problem  # noqa: E402
 
 SYNTHETIC = "synthetic-quadratic"
@@ -268,3 +271,129 @@ def test_the_full_mean_sigma_ga_makes_ten_generations_within_its_budget():
     options = config.mean_ga_options
     children = options.population_size - options.elite_count  # evaluated per generation
     assert (config.mean_budget - options.population_size) / children >= 10
+
+
+# -- the results of a protocol still running, written from the store alone (--from-store) --------------------
+
+
+def _store_counts(path: Path) -> tuple[int, int, int]:
+    """Runs, evaluations and finished runs in a store file."""
+    with sqlite3.connect(path) as connection:
+        runs, finished = connection.execute("SELECT count(*), count(stop_reason) FROM runs").fetchone()
+        (evaluations,) = connection.execute("SELECT count(*) FROM evaluations").fetchone()
+    return runs, evaluations, finished
+
+
+def _interrupt(path: Path, optimizer: str, seed: int, kept: int) -> None:
+    """Make a finished run of the store look like one killed after ``kept`` evaluations."""
+    with sqlite3.connect(path) as connection:
+        (run_id,) = connection.execute(
+            "SELECT run_id FROM runs WHERE optimizer = ? AND seed = ?", (optimizer, seed)
+        ).fetchone()
+        connection.execute(
+            "UPDATE runs SET finished_at = NULL, stop_reason = NULL WHERE run_id = ?", (run_id,)
+        )
+        connection.execute("DELETE FROM evaluations WHERE run_id = ? AND idx >= ?", (run_id, kept))
+
+
+def test_from_store_writes_the_finished_runs_and_simulates_nothing(tmp_path, monkeypatch):
+    """A store with finished runs, a run killed part-way and runs never started: ``--from-store`` writes
+    the finished runs' rows as the full study writes them, lists the others as not run yet with the
+    simulations the store holds, and neither simulates nor starts nor resumes a run."""
+    from experiments.cli.report import build_report
+
+    made = optimizer_comparison.Config(
+        out=tmp_path, problems=(SYNTHETIC,), optimizers=("random", "cma", "de")
+    )
+    folder = optimizer_comparison.main(made)
+    full_rows = (folder / "evaluations.csv").read_text(encoding="utf-8").splitlines()
+    store = tmp_path / "runs.sqlite"
+    _interrupt(store, "cma", 1, kept=5)
+    before = _store_counts(store)
+
+    _no_simulation(monkeypatch)
+    for name in ("optimize", "train_policy"):  # a resumed run would replay without simulating: refuse it too
+        monkeypatch.setattr(optimizer_comparison, name, lambda *a, **k: pytest.fail("a run was made"))
+    args = "--optimizers random cma de pso --from-store --out".split() + [str(tmp_path)]
+    config = config_from(
+        optimizer_comparison.Config, study_parser(optimizer_comparison, "x").parse_args(args)
+    )
+    assert config.from_store  # the option, declared once, as `catenary experiment optimizers` takes it too
+    optimizer_comparison.main(dataclasses.replace(config, problems=(SYNTHETIC,)))  # (--problems: catalogue)
+    assert _store_counts(store) == before  # nothing written to the store: no run started or resumed
+
+    runs = {(r["optimizer"], int(r["seed"])): r for r in read_csv(folder / "runs.csv")}
+    done = {key for key, r in runs.items() if r["status"] == "done"}
+    assert done == {("random", 0), ("random", 1), ("cma", 0), ("de", 0), ("de", 1)}
+    killed = runs[("cma", 1)]
+    assert (killed["status"], killed["n_simulations"]) == ("not run yet", 5)  # CMA-ES charges each design
+    assert "5 of its 12 simulations in the store" in killed["note"]
+    for seed in (0, 1):
+        assert (runs[("pso", seed)]["status"], runs[("pso", seed)]["n_simulations"]) == ("not run yet", 0)
+    written = (folder / "evaluations.csv").read_text(encoding="utf-8").splitlines()
+    kept = [full_rows[0]] + [
+        r for r in full_rows[1:] if r.split(",")[1:4:2] != ["cma", "1"]
+    ]  # optimizer, seed
+    assert written == kept  # the finished runs' rows, as the study wrote them when it made the runs
+
+    text = (folder / "optimizers.md").read_text(encoding="utf-8")
+    assert text.startswith("Partial: 5 of 8 runs of the protocol finished")
+    assert (
+        f"- not run yet on {SYNTHETIC} (runs of each optimiser): cma 1 (5 simulations in the store), pso 2"
+        in text
+    )
+    summary = {r["optimizer"]: r["runs"] for r in read_csv(folder / "summary.csv")}
+    assert summary == {"random": 2, "cma": 1, "de": 2}
+    assert "not computed: the 3 optimisers have finished runs in common on 1 block(s)" in text
+    assert not (folder / "ranks.csv").exists()
+    assert _check_ioh(folder / "ioh", (SYNTHETIC,), made.budget) == 5
+    assert "Partial: 5 of 8 runs" in build_report(tmp_path).read_text(encoding="utf-8")  # catenary report
+
+
+def test_from_store_on_a_protocol_not_started_yet(tmp_path, monkeypatch):
+    """Before the first run finishes: every run of the protocol not run yet (PPO not run on a problem whose
+    bounds are not centred on its reference design), empty tables, and the model's stamp as for a full run."""
+    from experiments.model_stamp import ModelStamp
+
+    _no_simulation(monkeypatch)
+    with pytest.raises(StoreError, match="no run store here"):
+        optimizer_comparison.main(optimizer_comparison.Config(out=tmp_path, from_store=True))
+    RunStore(tmp_path / "runs.sqlite").close()
+    config = optimizer_comparison.Config(out=tmp_path, problems=("B1", "B2"), from_store=True)
+    folder = optimizer_comparison.main(config)
+    runs = read_csv(folder / "runs.csv")
+    statuses = {(r["problem"], r["optimizer"], r["status"]) for r in runs}
+    assert ("B2", "ppo", "not run") in statuses and ("B1", "ppo", "not run yet") in statuses
+    assert {r["n_simulations"] for r in runs} == {0}
+    assert read_csv(folder / "evaluations.csv") == [] and read_csv(folder / "summary.csv") == []
+    assert not (folder / "convergence.png").exists()
+    pending = sum(r["status"] == "not run yet" for r in runs)
+    assert (folder / "optimizers.md").read_text(encoding="utf-8").startswith(f"Partial: 0 of {pending} runs")
+    assert ModelStamp.read(folder) == ModelStamp.now(("benchmark",))
+
+
+def test_from_store_finds_a_ppo_run_where_the_study_stores_it(tmp_path, monkeypatch):
+    """The identity ``--from-store`` looks a PPO run up by is the one its training stores it under."""
+    import optimizers.rl
+
+    class Opened(Exception):
+        pass
+
+    def capture(store, config, resume, start_if_none=True):
+        raise Opened(config)
+
+    monkeypatch.setattr(optimizers.rl, "open_run", capture)
+    config = optimizer_comparison.Config(out=tmp_path)
+    with RunStore(":memory:") as store, pytest.raises(Opened) as opened:
+        optimizer_comparison._run(store, config, "ppo", "B1", 1, "")
+    assert optimizer_comparison._prepare(config, "ppo", "B1", 1).identity == opened.value.args[0]
+
+
+def test_a_problem_without_a_reference_design_has_no_reference_row(tmp_path, monkeypatch):
+    """B3 and SW3 cannot express the reference design (their droppers are variables): the comparison simulates
+    no reference there (it asked for a design of NaN before, and stopped at B3)."""
+    _no_simulation(monkeypatch)
+    folder = optimizer_comparison.main(
+        optimizer_comparison.Config(out=tmp_path, problems=("B3",), optimizers=())
+    )
+    assert read_csv(folder / "reference.csv") == []

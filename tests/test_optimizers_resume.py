@@ -187,3 +187,29 @@ def test_catenary_runs_refuses_a_missing_or_empty_store_without_writing(tmp_path
     assert main(["runs", "--store", str(empty)]) == 2
     assert "an empty file, not a run store" in capsys.readouterr().err
     assert empty.stat().st_size == 0  # read only: no schema written into it
+
+
+def test_a_finished_run_reads_back_as_its_resumption_returns_it(tmp_path):
+    """``finished_result`` (the comparison's ``--from-store``) gives, without its optimiser, the result a
+    resumption of the finished run returns; an unfinished run is refused."""
+    from optimizers.plugins import get_optimizer
+    from optimizers.problem import GridSpace
+    from optimizers.problem_registry import resolve_problem
+    from optimizers.recorder import finished_result
+    from optimizers.runner import run_config
+    from optimizers.store import RunStore, StoreError
+
+    store = tmp_path / "runs.sqlite"
+    problem = "synthetic-quadratic"
+    made = optimize(problem, "cma", 20, 2, fidelity="test", store=store)
+    space = GridSpace.from_problem(resolve_problem(problem))
+    with RunStore(store, read_only=True) as opened:
+        config = run_config("cma", space, 20, 2, 300.0, "test", get_optimizer("cma").options_class())
+        assert opened.find_run(config) == made.run_id
+        read = finished_result(opened, made.run_id, config, space)
+    resumed = optimize(problem, "cma", 20, 2, fidelity="test", store=store, resume=True)
+    assert read == resumed == made
+    with sqlite3.connect(store) as connection:
+        connection.execute("UPDATE runs SET stop_reason = NULL WHERE run_id = ?", (made.run_id,))
+    with RunStore(store, read_only=True) as opened, pytest.raises(StoreError, match="has not finished"):
+        finished_result(opened, made.run_id, config, space)
