@@ -31,7 +31,7 @@ STUDIES = {
         "design_studies", "the six GA design studies, static analysis of the optima, σ against speed"
     ),
     "optimizers": Study(
-        "optimizer_comparison", "seven optimisers on B1 and SW1 at equal budgets, with IOHprofiler output"
+        "optimizer_comparison", "nine optimisers, six problems, equal budgets, IOHprofiler output"
     ),
     "rl": Study("rl_studies", "PPO learning curves, a speed-conditioned policy, a design for 200-320 km/h"),
     "rl-amortised": Study(
