@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 from catenary_env.errors import UsageError
 from catenary_env.model.buildability import DEFAULT_BUILDABILITY, NO_LIMITS, BuildabilityLimits
 from catenary_env.model.tolerances import PRACTICE, Tolerances, draw_deviations
-from catenary_env.pipeline import Evaluation
+from catenary_env.pipeline import CONSTRAINTS, Evaluation
 from catenary_env.problems import get_problem, resolve_fidelity
 from catenary_env.problems.tolerance import RobustObjective
 from optimizers import optimize
@@ -191,7 +191,10 @@ def simulate_variant(
     variant = get_problem(problem).with_options(buildability, robust)
     evaluation = variant.evaluate(tuple(x), float(speed_kmh), fidelity)
     sigma = None if evaluation.statistics is None else float(evaluation.statistics.std)
-    return Outcome(bool(evaluation.feasible), sigma, evaluation.reason, float(evaluation.wall_time))
+    constraints = tuple(float(v) for v in evaluation.constraints)  # the GA's penalty while none is feasible
+    return Outcome(
+        bool(evaluation.feasible), sigma, evaluation.reason, float(evaluation.wall_time), constraints
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -207,6 +210,7 @@ class VariantProblem:
     buildability: BuildabilityLimits = NO_LIMITS
     robust: RobustObjective | None = None
     model_fingerprint: str = ""
+    constraint_names: tuple[str, ...] = CONSTRAINTS
 
     @property
     def simulate(self) -> Any:

@@ -298,6 +298,9 @@ def test_the_robust_objective_is_the_mean_or_quantile_of_sigma_over_the_same_dra
     wide = problem.with_options(robust=RobustObjective(Tolerances(0.01, 0.05), 2, 1))
     ev = wide.evaluate([0.0] * 5, 300.0, "test", UPLIFT)
     assert not ev.feasible and ev.reason.startswith("tolerance draw 0 of 2: static:")
+    # The constraint values are the worst draw's: the GA's penalty while no design is feasible.
+    assert mean.constraints == pytest.approx(np.max([e.constraints for e in draws.evaluations], axis=0))
+    assert ev.constraints[0] > 0.0  # a dropper in compression in some draw
 
 
 def test_the_robust_env_rewards_minus_the_robust_sigma():

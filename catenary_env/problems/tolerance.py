@@ -19,7 +19,7 @@ Examples
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -30,7 +30,13 @@ from ..analysis.statistics import ContactStatistics
 from ..model.tolerances import PRACTICE, SectionDeviations, Tolerances, draw_deviations
 from ..pipeline import Evaluation, default_acceptance
 
-__all__ = ["RobustObjective", "ToleranceEvaluation", "evaluate_under_tolerances", "robust_evaluation"]
+__all__ = [
+    "RobustObjective",
+    "ToleranceEvaluation",
+    "evaluate_under_tolerances",
+    "robust_evaluation",
+    "worst_constraints",
+]
 
 
 @dataclass(frozen=True)
@@ -179,17 +185,20 @@ def evaluate_under_tolerances(
 
 def robust_evaluation(result: ToleranceEvaluation, robust: RobustObjective, speed_kmh: float) -> Evaluation:
     """The robust objective's evaluation: feasible when every draw is; its statistics are each statistic's
-    mean over the draws (or the chosen quantile), so ``statistics.std`` is the robust σ."""
+    mean over the draws (or the chosen quantile), so ``statistics.std`` is the robust σ; its constraint values
+    the worst draw's (feasible when every draw is)."""
     evaluations = result.evaluations
     first = evaluations[0]
     wall = float(sum(e.wall_time for e in evaluations))
+    constraints = worst_constraints(evaluations)
     bad = [(k, e) for k, e in enumerate(evaluations) if not e.feasible]
     if bad:
         k, e = bad[0]
         reason = f"tolerance draw {k} of {len(evaluations)}: {e.reason}"
         return Evaluation(
-            False, reason, None, first.dropper_lengths, first.dropper_forces, first.uplift_force, wall
-        )
+            False, reason, None, first.dropper_lengths, first.dropper_forces, first.uplift_force, wall,
+            constraints=constraints,
+        )  # fmt: skip
     stats = [e.statistics for e in evaluations if e.statistics is not None]
     values = {}
     for f in fields(ContactStatistics):
@@ -208,4 +217,18 @@ def robust_evaluation(result: ToleranceEvaluation, robust: RobustObjective, spee
         first.uplift_force,
         wall,
         acceptance=acceptance,
+        constraints=constraints,
+    )
+
+
+def worst_constraints(evaluations: Sequence[Evaluation]) -> tuple[float, ...]:
+    """Each constraint value's largest over the draws (NaN where no draw computed it)."""
+    known = [e.constraints for e in evaluations if e.constraints]
+    if not known:
+        return ()
+    values = np.array(known, dtype=np.float64)
+    computed = np.isfinite(values)
+    return tuple(
+        float(np.max(column[ok])) if ok.any() else float("nan")
+        for column, ok in zip(values.T, computed.T, strict=True)
     )
