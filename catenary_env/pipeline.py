@@ -170,7 +170,9 @@ CONSTRAINTS = ("dropper_compression_N", "dropper_length_shortfall_m", "contact_l
 """The feasibility constraints of :attr:`Evaluation.constraints`, each feasible when <= 0: the largest
 compression of a dropper at equilibrium over the section (N, minus the smallest dropper force), the
 largest shortfall of an unstretched dropper length (m, minus the shortest length) and the share of the
-analysis section's time in which contact is lost (%)."""
+analysis section's time in which contact is lost (%). Under buildability limits the first two are measured
+from the limits' smallest dropper force and length (docs/acceptance.md, 'Buildability limits'); the widest
+dropper spacing, a property of the design, has no constraint value."""
 
 
 @dataclass(frozen=True)
@@ -491,7 +493,7 @@ def evaluate_unchecked(
     reason = static.infeasibility() or buildability_violation(static, buildability)
     if reason:
         wall_time = time.perf_counter() - start
-        constraints = _constraints(static, math.nan)
+        constraints = _constraints(static, math.nan, buildability)
         return Evaluation(False, reason, None, lengths, forces, force, wall_time, constraints=constraints)
     sim = run_passage(static, pantograph, speed, fidelity, force, statistics_only=True, train=train)
     for i, stats in enumerate(sim.pantograph_statistics):
@@ -504,7 +506,7 @@ def evaluate_unchecked(
     position, filtered = _trace(sim)
     blocks = sim.pantograph_statistics
     objective = objective_sigma(blocks, train.objective) if train.trailing else None
-    constraints = _constraints(static, max(stats.contact_loss_percent for stats in blocks))
+    constraints = _constraints(static, max(stats.contact_loss_percent for stats in blocks), buildability)
     wall_time = time.perf_counter() - start
     return Evaluation(
         not reason,
@@ -523,10 +525,13 @@ def evaluate_unchecked(
     )
 
 
-def _constraints(static: StaticSolution, contact_loss_percent: float) -> tuple[float, ...]:
-    """The values of :data:`CONSTRAINTS` (feasible when <= 0)."""
-    compression = -float(np.min(static.dropper_forces))
-    shortfall = -float(np.min(static.dropper_lengths))
+def _constraints(
+    static: StaticSolution, contact_loss_percent: float, buildability: BuildabilityLimits = NO_LIMITS
+) -> tuple[float, ...]:
+    """The values of :data:`CONSTRAINTS` (feasible when <= 0), measured from the buildability limits' smallest
+    dropper force and length (0 without limits)."""
+    compression = buildability.min_dropper_force - float(np.min(static.dropper_forces))
+    shortfall = buildability.min_dropper_length - float(np.min(static.dropper_lengths))
     return compression, shortfall, float(contact_loss_percent)
 
 

@@ -117,6 +117,9 @@ def test_a_dropper_below_the_minimum_force_makes_the_design_infeasible_naming_th
     limited = problem.with_options(buildability=DEFAULT_BUILDABILITY).evaluate(x, 300.0, "test", UPLIFT)
     assert not limited.feasible and limited.statistics is None  # refused before any dynamics
     assert "below buildability.min_dropper_force = 30 N" in limited.reason
+    # Its constraint value is measured from the limit: positive, so that every infeasible design violates one.
+    assert free.constraints[0] < 0.0 < limited.constraints[0]
+    assert limited.constraints[0] == pytest.approx(30.0 + free.constraints[0], rel=1e-12)
 
 
 def test_the_shortest_dropper_and_the_widest_spacing_are_limits_too():
