@@ -284,7 +284,9 @@ def spread_row(
 def run_spread(config: Config, folder: Path) -> None:
     """Part 1: every design, nominal (level 0, draw -1) and on the draws of each level. Each row is logged
     as it completes (``log.jsonl``, keyed by the problem's store fingerprint), so that an interrupted spread
-    resumes where it stopped."""
+    resumes where it stopped; the draws run in order of their number (every design's and level's draw k
+    before any draw k + 1), so that a spread cut short holds the first draws of all, and ``--draws K``
+    writes the spread of those K from the log without simulating."""
     designs = spread_designs(config)
     uplift = {p: get_problem(p).uplift_force(DESIGN_SPEED, config.fidelity) for _, p, _ in designs}
     prefix = {p: get_problem(p).store_fingerprint() for _, p, _ in designs}
@@ -300,7 +302,7 @@ def run_spread(config: Config, folder: Path) -> None:
         return json.dumps(["spread", prefix[problem], label, mm, k, list(x), seed, fidelity, force])
 
     log = ResultLog(folder / "log.jsonl")
-    todo = [job for job in jobs if log.get(key(job)) is None]
+    todo = sorted((job for job in jobs if log.get(key(job)) is None), key=lambda job: job[3])  # by draw
     for job, row in _completed(config, spread_row, todo):
         log.put(key(job), row)
     write_csv(folder / "spread.csv", [log.get(key(job)) for job in jobs])

@@ -412,6 +412,11 @@ def test_an_interrupted_spread_resumes_from_its_log_without_simulating_again(tmp
     tolerance.main(config)
     assert len(evaluated) == 2  # the line cut short and the one after it, nothing else
     assert (folder / "spread.csv").read_text(encoding="utf-8") == written
+    # Draw 0 of every design ran before any draw 1: one draw fewer is written from the log alone.
+    assert [json.loads(line)["value"]["draw"] for line in lines] == [-1, -1, 0, 0, 1, 1]
+    monkeypatch.setattr(tolerance, "evaluate_draw", lambda *job: pytest.fail("simulated again"))
+    rows = tolerance.read_csv(tolerance.main(dataclasses.replace(config, draws=1)) / "spread.csv")
+    assert [r["draw"] for r in rows] == [-1, 0, -1, 0]
 
 
 @pytest.mark.slow  # the real quick study: about a minute
