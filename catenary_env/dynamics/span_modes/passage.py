@@ -49,12 +49,9 @@ def _configurations(
     prepared: PreparedSpanModes, points: tuple[ContactPointArrays, ...]
 ) -> tuple[SpanModeArrays, np.ndarray]:
     """The design's arrays with the configurations the passage meets, and each step's configuration: the
-    spans the pantographs are in (docs/model.md, 'Several pantographs'). One pantograph meets the
-    prepared configurations, one per span."""
+    spans the pantographs are in (docs/model.md, 'Several pantographs')."""
     d = prepared.arrays
     spans = np.stack([np.where(p.element >= 0, d.element_span[np.maximum(p.element, 0)], -1) for p in points])
-    if len(points) == 1:
-        return d, spans[0]
     on = spans >= 0
     for i in range(len(points)):
         for j in range(i + 1, len(points)):

@@ -117,10 +117,11 @@ class PreparedSpanModes:
     constants : NewmarkConstants
     near_spans : int
     arrays : SpanModeArrays
-        What both loops read of the design, with the configurations of one pantograph (configuration c:
-        the pantograph in span c).
+        What both loops read of the design, with one configuration (the pantograph in the first span); a
+        passage reads :meth:`arrays_for` the configurations it meets.
     builder : _ConfigurationBuilder
-        Builds the configurations of several pantographs (:meth:`arrays_for`), once each.
+        Builds the configurations (:meth:`arrays_for`), once each, when a passage first needs them: one that
+        stops early, as ``evaluate``'s does, never builds those of the spans it does not reach.
     """
 
     reduced: ReducedSystem
@@ -143,8 +144,8 @@ class PreparedSpanModes:
 
 def prepare(system: LinearSystem, fidelity: DynamicsSettings) -> PreparedSpanModes:
     """The span modes below the fidelity's cut-offs (:func:`.reduction.reduce_system`) and, for its time
-    step and near spans, the Schur complements, dropper responses and residual compliances of every
-    configuration of one pantograph."""
+    step and near spans, what the Schur complements, dropper responses and residual compliances of each
+    configuration are built from (:meth:`PreparedSpanModes.arrays_for`)."""
     if not system.rayleigh:
         raise ValueError(
             "the span-mode model integrates C = alpha M + beta K with slack droppers dropping their whole "
@@ -165,19 +166,19 @@ def prepare_reduced(reduced: ReducedSystem, time_step: float, near_spans: int) -
     droppers = _dropper_arrays(reduced, modes["inverse_diagonal"])
     residual = _Residuals(reduced, c_k, c_m, droppers["dropper_span"])
     builder = _ConfigurationBuilder(reduced, c_k, c_m, modes, droppers, residual, near_spans)
-    configurations = stack_configurations([builder.build((s,)) for s in range(reduced.span_type.size)])
+    first = builder.build((0,))  # every passage starts there
     elements = _element_arrays(reduced, droppers, residual)
     kh = system.static.layout.catenary.contact_stiffness
     arrays = SpanModeArrays(
         **modes,
         **droppers,
-        **configurations,
+        **stack_configurations([first]),
         **elements,
         droppers=Droppers.for_step(system.dropper_rate, system.dropper_force, system.beta, nm.a1),
         support=residual.interface_position[system.support_z],
         coefficients=StepCoefficients.for_step(nm, system.alpha, system.beta, kh),
     )
-    return PreparedSpanModes(reduced, nm, near_spans, arrays, builder)
+    return PreparedSpanModes(reduced, nm, near_spans, arrays, builder, {(0,): first})
 
 
 def _mode_arrays(reduced: ReducedSystem, c_k: float, c_m: float) -> dict[str, np.ndarray]:
