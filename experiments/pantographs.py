@@ -296,18 +296,22 @@ def _figure(rows: list[dict], path: Path) -> None:
     fig, axes = plt.subplots(1, len(problems), figsize=(5.5 * len(problems), 4), squeeze=False)
     for ax, problem in zip(axes[0], problems, strict=True):
         for i, label in enumerate(("single", "worst")):
-            pick = [r for r in rows if r["problem"] == problem and r["design"] == label and r["feasible"]]
+            pick = [r for r in rows if r["problem"] == problem and r["design"] == label]
             speeds = [r["speed_kmh"] for r in pick]
             name = "single-pantograph optimum" if label == "single" else "worst-σ optimum"
-            ax.plot(
-                speeds, [r["sigma_leading_N"] for r in pick], "o-", color=f"C{i}", label=f"{name}, leading"
-            )
-            ax.plot(
-                speeds, [r["sigma_trailing_N"] for r in pick], "s--", color=f"C{i}", label=f"{name}, trailing"
-            )
+            for key, style, which in (
+                ("sigma_leading_N", "o-", "leading"),
+                ("sigma_trailing_N", "s--", "trailing"),
+            ):
+                # A speed at which a pantograph loses contact breaks the line and is marked x.
+                sigma = [r[key] if r["feasible"] else float("nan") for r in pick]
+                ax.plot(speeds, sigma, style, color=f"C{i}", label=f"{name}, {which}")
+                lost = [(r["speed_kmh"], r[key]) for r in pick if not r["feasible"]]
+                if lost:
+                    ax.plot(*zip(*lost, strict=True), "x", color=f"C{i}", markersize=8)
         ax.set_xlabel("speed (km/h)")
         ax.set_ylabel("σ of the contact force (N)")
-        ax.set_title(f"{problem}: two pantographs {SPACING:g} m apart")
+        ax.set_title(f"{problem}: two pantographs {SPACING:g} m apart (x: contact lost)")
         ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
