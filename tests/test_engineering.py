@@ -367,6 +367,20 @@ def test_the_tolerance_study_finds_where_an_optimum_meets_the_level_wire():
     assert meeting_tolerance(summary, "opt", "level") == pytest.approx(2.0 + 3.0 * 5.0 / 9.0)
     summary[3]["median_N"] = 40.0
     assert meeting_tolerance(summary, "opt", "level") == math.inf
+    # Infeasible at every level: nothing to compare, not an advantage kept.
+    for row in summary[2:]:
+        row["median_N"] = math.nan
+    assert math.isnan(meeting_tolerance(summary, "opt", "level"))
+
+
+def test_the_catenarys_verdict_leaves_the_mean_force_window_to_the_uplift():
+    # At the calibrated uplift Fm sits on the upper curve (157.3 N at 300 km/h): a hundredth of a newton above
+    # fails the whole block but not what the catenary decides.
+    limits = load_acceptance()
+    above = assess(_stats(157.31, 30.0), 300.0, limits)
+    assert not above.passed and above.failed == ("mean force Fm (upper)",) and above.passed_by_the_catenary
+    rough = assess(_stats(157.31, 50.0), 300.0, limits)  # σ/Fm 0.32, Fm - 3σ < 0
+    assert not rough.passed_by_the_catenary
 
 
 def test_the_tolerance_study_refuses_a_draw_count_before_simulating(monkeypatch):
