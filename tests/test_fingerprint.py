@@ -96,8 +96,18 @@ def test_the_fidelity_contract_was_measured_on_the_current_model(monkeypatch):
         )
 
 
+def _study_folders(root):
+    """The folders of committed studies: each folder of ``root``, or, for one that holds only folders (the
+    results of a study run elsewhere, e.g. results/full-protocol/optimizers), each of those."""
+    for folder in sorted(p for p in root.iterdir() if p.is_dir()):
+        if any(p.is_file() for p in folder.iterdir()):
+            yield folder
+        else:
+            yield from _study_folders(folder)
+
+
 def test_every_committed_study_names_the_model_that_made_it():
-    studies = [folder for folder in sorted((ROOT / "results").iterdir()) if folder.is_dir()]
+    studies = list(_study_folders(ROOT / "results"))
     assert studies
     for folder in studies:
         stamp = ModelStamp.read(folder)
