@@ -153,7 +153,7 @@ def rank_expectation(
     if not np.any(feasible):
         if violations is None or not np.any(np.isfinite(violations)):
             return np.full(n, n_parents / n)
-        losses = np.where(np.isfinite(violations), violations, np.inf)
+        losses = penalty_scores(losses, violations)
         feasible = np.isfinite(losses)
     ranks = np.empty(n)
     ranks[np.argsort(losses, kind="stable")] = np.arange(1, n + 1)
