@@ -72,6 +72,8 @@ DESIGN_SPEED = 300.0
 """km/h: the problems' design speed (docs/problems.md)."""
 SPREAD_ROW = "spread-2"
 """The spread's row format in the log's keys: rows of another format are simulated again."""
+ROBUST_ROW = "robust-1"
+"""The robust part's row format in the log's keys."""
 LEVELS_MM = (2.0, 5.0, 10.0)
 """Contact-wire height tolerances of the spread, ± mm (with :data:`PRACTICE`'s dropper-position error)."""
 RECORDED = Path(__file__).resolve().parents[1] / "results" / "design"
@@ -244,13 +246,6 @@ def _completed(
             yield futures[future], future.result()
 
 
-def _map(config: Config, jobs: list[tuple[Any, ...]]) -> list[Evaluation]:
-    if config.workers == 1 or len(jobs) < 2:
-        return [evaluate_draw(*job) for job in jobs]
-    with ProcessPoolExecutor(max_workers=config.workers) as pool:
-        return list(pool.map(evaluate_draw, *zip(*jobs, strict=True)))
-
-
 def _row(label: str, problem: str, level_mm: float, draw: int, ev: Evaluation) -> dict[str, Any]:
     stats = ev.statistics
     return {
@@ -348,10 +343,23 @@ def _buildable(name: str, x: tuple[float, ...], fidelity: str, uplift: float) ->
     return not ev.reason.startswith(("design", "static", "buildability"))
 
 
+def robust_row(
+    label: str, problem: str, x: tuple[float, ...], draw: int, seed: int, fidelity: str, uplift: float
+) -> dict[str, Any]:
+    """One row of the robust part, in a worker: an optimum as designed (``draw`` -1) or on one draw of
+    the practice tolerances."""
+    tolerances = None if draw < 0 else PRACTICE
+    evaluation = evaluate_draw(problem, x, tolerances, seed, draw, fidelity, uplift)
+    row = _row(label, problem, 0.0 if draw < 0 else 1000 * PRACTICE.height, draw, evaluation)
+    return {**row, "fidelity": fidelity, "x": " ".join(f"{v:g}" for v in x)}
+
+
 def run_robust(config: Config, folder: Path) -> None:
     """Part 3: the GA on the robust objective; nominal and robust optima, nominal σ and σ under draws, on
-    the study's model and on the exact one."""
-    rows = []
+    the study's model and on the exact one. The GA resumes from the run store and each row of the
+    comparison is logged as it completes (``log.jsonl``), so that an interrupted part, or the problems run
+    in separate processes, lose nothing."""
+    jobs = []
     for name in (p for p in ROBUST_PROBLEMS if p in config.problems):
         optima = {"nominal optimum": recorded_optimum(name)}
         problem = variant_problem(name, "robust", NO_LIMITS, config.robust)
@@ -367,14 +375,20 @@ def run_robust(config: Config, folder: Path) -> None:
         ):
             uplift = get_problem(name).uplift_force(DESIGN_SPEED, fidelity)
             for label, x in optima.items():
-                if x is None:
-                    continue
-                jobs = [(name, x, None, config.seed, -1, fidelity, uplift)]
-                jobs += [(name, x, PRACTICE, config.seed + 1, k, fidelity, uplift) for k in range(n_draws)]
-                for job, ev in zip(jobs, _map(config, jobs), strict=True):
-                    row = _row(label, name, 0.0 if job[2] is None else 1000 * PRACTICE.height, job[4], ev)
-                    rows.append({**row, "fidelity": fidelity, "x": " ".join(f"{v:g}" for v in x)})
-    write_csv(folder / "robust.csv", rows)
+                if x is not None:
+                    draws = [(-1, config.seed), *((k, config.seed + 1) for k in range(n_draws))]
+                    jobs += [(label, name, x, k, seed, fidelity, uplift) for k, seed in draws]
+
+    prefix = {name: get_problem(name).store_fingerprint() for name in {job[1] for job in jobs}}
+
+    def key(job: tuple[Any, ...]) -> str:
+        label, problem, x, k, seed, fidelity, force = job
+        return json.dumps([ROBUST_ROW, prefix[problem], label, list(x), k, seed, fidelity, force])
+
+    log = ResultLog(folder / "log.jsonl")
+    for job, row in _completed(config, robust_row, [job for job in jobs if log.get(key(job)) is None]):
+        log.put(key(job), row)
+    write_csv(folder / "robust.csv", [log.get(key(job)) for job in jobs])
 
 
 def main(config: Config) -> Path:

@@ -433,6 +433,27 @@ def test_an_interrupted_spread_resumes_from_its_log_without_simulating_again(tmp
     assert [r["draw"] for r in rows] == [-1, 0, -1, 0]
 
 
+def test_the_robust_part_run_problem_by_problem_writes_both_from_its_log(tmp_path, monkeypatch):
+    from experiments import tolerance
+
+    def config(*problems):
+        return tolerance.Config(out=tmp_path, workers=1, parts=("robust",), problems=problems)
+
+    written = (tolerance.main(config("B1")) / "robust.csv").read_text(encoding="utf-8").splitlines()
+    first = tolerance.read_csv(tmp_path / "tolerance" / "robust.csv")
+    assert {r["problem"] for r in first} == {"B1"}
+    # Each optimum as designed and on 3 draws (the study's fidelity), then on 2 (the confirmation's).
+    draws = [-1, 0, 1, 2, -1, 0, 1]
+    assert [r["draw"] for r in first] in (draws, draws * 2)  # the quick GA may find no feasible design
+    evaluated = []
+    real = tolerance.evaluate_draw
+    monkeypatch.setattr(tolerance, "evaluate_draw", lambda *job: evaluated.append(job[0]) or real(*job))
+    folder = tolerance.main(config("B1", "SW1"))
+    assert set(evaluated) == {"SW1"}  # B1's rows came from the log; its GA from the run store
+    assert (folder / "robust.csv").read_text(encoding="utf-8").splitlines()[: len(written)] == written
+    assert {r["problem"] for r in tolerance.read_csv(folder / "robust.csv")} == {"B1", "SW1"}
+
+
 @pytest.mark.slow  # the real quick study: about a minute
 def test_the_quick_tolerance_study_runs_its_three_parts(tmp_path):
     from experiments import tolerance
