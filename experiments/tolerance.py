@@ -587,6 +587,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="which parts to run: spread (σ under tolerances), buildable (GA under the buildability "
         "defaults), robust (GA on the robust objective); default: all three",
     )  # fmt: skip
+    parser.add_argument(
+        "--problems", nargs="+", default=list(PROBLEMS), choices=PROBLEMS, metavar="NAME",
+        help=f"the design problems, of {' '.join(PROBLEMS)} (default: all; the robust part runs "
+        f"{' and '.join(ROBUST_PROBLEMS)} of them); separate problems in separate processes share the log",
+    )  # fmt: skip
     add_workers_option(parser, 2)
     add_out_option(parser)
 
