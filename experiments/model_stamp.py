@@ -71,7 +71,11 @@ def stamp_study(folder: Path, catenaries: Sequence[str]) -> None:
     one is removed.
     """
     if catenaries:
-        ModelStamp.now(catenaries).write(folder)
+        # A run on some of a study's problems (one lane of several) leaves the data of the others in the
+        # folder (their files, the rows of its logs): where today's model made those too, it names them all.
+        old = ModelStamp.read(folder)
+        kept = old.catenaries if old is not None and old.is_current() else ()
+        ModelStamp.now((*kept, *catenaries)).write(folder)
     else:
         (Path(folder) / STAMP).unlink(missing_ok=True)
 

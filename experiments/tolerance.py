@@ -447,6 +447,23 @@ def spread_summary(rows: list[dict]) -> list[dict[str, Any]]:
     return out
 
 
+def robust_summary(rows: list[dict]) -> list[dict[str, Any]]:
+    """Per problem, optimum and model (the study's, the exact one): the spread's summary of its draws,
+    with its variables."""
+    keyed = [{**r, "design": (r["problem"], r["design"], r["fidelity"])} for r in rows]
+    out = []
+    for s in spread_summary(keyed):
+        problem, optimum, fidelity = s["design"]
+        mine = [r for r in keyed if r["design"] == s["design"]]
+        nominal = next(r for r in mine if r["draw"] == -1)
+        out.append({
+            **s, "optimum": optimum, "fidelity": fidelity, "x": str(nominal["x"]),
+            "draws": sum(1 for r in mine if r["draw"] >= 0),
+            "nominal_dropper_N": nominal["min_dropper_force_N"],
+        })  # fmt: skip
+    return out
+
+
 def _meets(mm: float) -> str:
     """:func:`meeting_tolerance` in words."""
     if math.isnan(mm):
@@ -508,11 +525,17 @@ BUILDABLE_COLUMNS = [
 ]
 ROBUST_COLUMNS = [
     ("problem", "problem", "s"),
-    ("design", "design", "s"),
+    ("optimum", "optimum", "s"),
     ("fidelity", "model", "s"),
-    ("draw", "draw (-1: nominal)", ".0f"),
-    ("sigma_N", "σ (N)", ".2f"),
-    ("feasible", "feasible", ".0f"),
+    ("x", "variables (m)", "s"),
+    ("nominal_N", "σ as designed (N)", ".2f"),
+    ("nominal_dropper_N", "smallest dropper force as designed (N)", ".1f"),
+    ("draws", "draws", "d"),
+    ("median_N", "σ median (N)", ".2f"),
+    ("p10_N", "p10 (N)", ".2f"),
+    ("p90_N", "p90 (N)", ".2f"),
+    ("infeasible_percent", "infeasible (%)", ".0f"),
+    ("catenary_accepted_percent", "EN 50367 pass, Fm window aside (%)", ".0f"),
 ]
 
 
@@ -529,12 +552,18 @@ def report(folder: Path) -> str:
             )
         parts.append(markdown_table(summary, SPREAD_COLUMNS))
         _figure(rows, folder / "spread.png")
-    for name, columns in (("buildable", BUILDABLE_COLUMNS), ("robust", ROBUST_COLUMNS)):
-        if (folder / f"{name}.csv").is_file():
-            rows = read_csv(folder / f"{name}.csv")
-            for r in rows:
-                r["x"] = str(r.get("x", ""))
-            parts.append(markdown_table(rows, columns))
+    if (folder / "buildable.csv").is_file():
+        rows = read_csv(folder / "buildable.csv")
+        parts.append(markdown_table([{**r, "x": str(r.get("x", ""))} for r in rows], BUILDABLE_COLUMNS))
+    if (folder / "robust.csv").is_file():
+        rows = read_csv(folder / "robust.csv")
+        parts.append(markdown_table(robust_summary(rows), ROBUST_COLUMNS))
+        study = [
+            {**r, "design": f"{r['problem']} {r['design']}"}
+            for r in rows
+            if r["fidelity"] == rows[0]["fidelity"]
+        ]
+        _figure(study, folder / "robust.png")
     text = "\n\n".join(parts)
     (folder / "tolerance.md").write_text(text + "\n", encoding="utf-8")
     return text
@@ -546,7 +575,8 @@ def _figure(rows: list[dict], path: Path) -> None:
     plt = pyplot()
     levels = sorted({r["level_mm"] for r in rows if r["draw"] >= 0})
     designs = list(dict.fromkeys(r["design"] for r in rows))
-    fig, axes = plt.subplots(1, len(levels), figsize=(4.5 * len(levels), 4.5), sharey=True, squeeze=False)
+    width = max(4.5 * len(levels), 7.0)
+    fig, axes = plt.subplots(1, len(levels), figsize=(width, 4.5), sharey=True, squeeze=False)
     for ax, level in zip(axes[0], levels, strict=True):
         data = [
             [r["sigma_N"] for r in rows if r["design"] == d and r["level_mm"] == level and r["feasible"]]
@@ -564,7 +594,7 @@ def _figure(rows: list[dict], path: Path) -> None:
         ax.set_xticks(range(1, len(designs) + 1), designs, rotation=60, ha="right")
         ax.set_title(f"±{level:g} mm height, ±{100 * PRACTICE.position:g} cm position", pad=16)
     axes[0][0].set_ylabel("σ of the feasible draws (N); whiskers p10-p90")
-    fig.suptitle("σ under installation tolerances; above each design: the share of draws that are feasible")
+    fig.suptitle("σ under installation tolerances;\nabove each design: the share of draws that are feasible")
     axes[0][0].legend()
     fig.tight_layout()
     fig.savefig(path, dpi=120)

@@ -452,6 +452,10 @@ def test_the_robust_part_run_problem_by_problem_writes_both_from_its_log(tmp_pat
     assert set(evaluated) == {"SW1"}  # B1's rows came from the log; its GA from the run store
     assert (folder / "robust.csv").read_text(encoding="utf-8").splitlines()[: len(written)] == written
     assert {r["problem"] for r in tolerance.read_csv(folder / "robust.csv")} == {"B1", "SW1"}
+    # The report: one row per problem, optimum and model, summarising its draws, and the figure.
+    table = tolerance.report(folder).split("\n\n")[-1]
+    assert "| B1 | nominal optimum | test |" in table and "| SW1 | nominal optimum | test |" in table
+    assert (folder / "robust.png").stat().st_size > 0
 
 
 @pytest.mark.slow  # the real quick study: about a minute

@@ -128,6 +128,15 @@ def test_the_report_names_data_made_with_another_model(tmp_path):
     assert model_section({"current": tmp_path / "current"}).endswith("made with the current model.")
 
 
+def test_a_study_run_on_some_of_its_problems_keeps_the_others_current_catenaries(tmp_path):
+    stamp_study(tmp_path, ["stitched"])
+    stamp_study(tmp_path, ["benchmark"])  # a lane of the study on a benchmark problem only
+    assert ModelStamp.read(tmp_path) == ModelStamp.now(["benchmark", "stitched"])
+    dataclasses.replace(ModelStamp.now(["stitched"]), fingerprint="0ld0ld0ld0ld").write(tmp_path)
+    stamp_study(tmp_path, ["benchmark"])  # the other data came from another model: not claimed
+    assert ModelStamp.read(tmp_path) == ModelStamp.now(["benchmark"])
+
+
 def test_a_study_of_synthetic_problems_only_names_no_catenary_model(tmp_path):
     stamp_study(tmp_path, ["benchmark"])
     assert ModelStamp.read(tmp_path) == ModelStamp.now(["benchmark"])
