@@ -520,6 +520,7 @@ BUILDABLE_COLUMNS = [
     ("x", "variables (m)", "s"),
     ("sigma_N", "σ (N)", ".2f"),
     ("reference_sigma_N", "σ level (N)", ".2f"),
+    ("reduction_percent", "reduction (%)", ".1f"),
     ("min_dropper_force_N", "smallest dropper force (N)", ".1f"),
     ("buildable", "buildable", ".0f"),
 ]
@@ -554,7 +555,10 @@ def report(folder: Path) -> str:
         _figure(rows, folder / "spread.png")
     if (folder / "buildable.csv").is_file():
         rows = read_csv(folder / "buildable.csv")
-        parts.append(markdown_table([{**r, "x": str(r.get("x", ""))} for r in rows], BUILDABLE_COLUMNS))
+        for r in rows:
+            r["x"] = str(r.get("x", ""))
+            r["reduction_percent"] = 100.0 * (1.0 - r["sigma_N"] / r["reference_sigma_N"])
+        parts.append(markdown_table(rows, BUILDABLE_COLUMNS))
     if (folder / "robust.csv").is_file():
         rows = read_csv(folder / "robust.csv")
         parts.append(markdown_table(robust_summary(rows), ROBUST_COLUMNS))
