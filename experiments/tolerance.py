@@ -246,6 +246,23 @@ def _completed(
             yield futures[future], future.result()
 
 
+def _logged(
+    config: Config,
+    folder: Path,
+    function: Callable[..., Any],
+    jobs: list[tuple[Any, ...]],
+    key: Callable[[tuple[Any, ...]], str],
+    order: Callable[[tuple[Any, ...]], Any] | None = None,
+) -> list[Any]:
+    """``function(*job)`` of every job, in the jobs' order: from the study's log (``log.jsonl``) where it
+    holds the job's key, else computed (in ``order``) and logged as it completes."""
+    log = ResultLog(folder / "log.jsonl")
+    todo = [job for job in jobs if log.get(key(job)) is None]
+    for job, row in _completed(config, function, todo if order is None else sorted(todo, key=order)):
+        log.put(key(job), row)
+    return [log.get(key(job)) for job in jobs]
+
+
 def _row(label: str, problem: str, level_mm: float, draw: int, ev: Evaluation) -> dict[str, Any]:
     stats = ev.statistics
     return {
@@ -303,11 +320,8 @@ def run_spread(config: Config, folder: Path) -> None:
         label, problem, mm, k, x, _, seed, fidelity, force = job
         return json.dumps([SPREAD_ROW, prefix[problem], label, mm, k, list(x), seed, fidelity, force])
 
-    log = ResultLog(folder / "log.jsonl")
-    todo = sorted((job for job in jobs if log.get(key(job)) is None), key=lambda job: job[3])  # by draw
-    for job, row in _completed(config, spread_row, todo):
-        log.put(key(job), row)
-    write_csv(folder / "spread.csv", [log.get(key(job)) for job in jobs])
+    rows = _logged(config, folder, spread_row, jobs, key, order=lambda job: job[3])  # by draw
+    write_csv(folder / "spread.csv", rows)
 
 
 def run_buildable(config: Config, folder: Path) -> None:
@@ -385,10 +399,7 @@ def run_robust(config: Config, folder: Path) -> None:
         label, problem, x, k, seed, fidelity, force = job
         return json.dumps([ROBUST_ROW, prefix[problem], label, list(x), k, seed, fidelity, force])
 
-    log = ResultLog(folder / "log.jsonl")
-    for job, row in _completed(config, robust_row, [job for job in jobs if log.get(key(job)) is None]):
-        log.put(key(job), row)
-    write_csv(folder / "robust.csv", [log.get(key(job)) for job in jobs])
+    write_csv(folder / "robust.csv", _logged(config, folder, robust_row, jobs, key))
 
 
 def main(config: Config) -> Path:
