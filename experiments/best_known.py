@@ -3,10 +3,10 @@ designs'): writes ``catenary_env/problems/best_known.json`` (read by ``problem.b
 ``results/best_known.md``.
 
 Per problem with variables, the lowest feasible σ of every evaluation recorded at the study fidelity and
-300 km/h, in the design studies' GA histories (``results/design/PROBLEM/history.csv``) and the optimiser
-comparison's runs (``results/optimizers/evaluations.csv``), whose model stamps must be today's model
-(:mod:`experiments.model_stamp`); the design is then simulated on the exact model (the ``reference``
-fidelity, about 3 s a problem) to confirm it.
+300 km/h, in the design studies' GA histories (``results/design/PROBLEM/history.csv``) and the runs of the
+optimiser comparisons (:data:`COMPARISONS`: the five-seed one and the full protocol, finished runs only,
+``evaluations.csv``), whose model stamps must be today's model (:mod:`experiments.model_stamp`); the design
+is then simulated on the exact model (the ``reference`` fidelity, about 3 s a problem) to confirm it.
 
     python -m experiments.best_known [--results results]
 """
@@ -30,6 +30,9 @@ from .model_stamp import ModelStamp
 PROBLEMS = ("B1", "B2", "B3", "SW1", "SW2", "SW3")
 SPEED_KMH = 300.0
 FIDELITY = "study"
+COMPARISONS = ("optimizers", "full-protocol/optimizers")
+"""The optimiser comparisons' folders under the results folder: the five-seed comparison and the full
+protocol (docs/problems.md, 'Reading the comparison')."""
 
 
 def candidates(results: Path, problem: str) -> list[tuple[float, tuple[float, ...], str]]:
@@ -45,14 +48,16 @@ def candidates(results: Path, problem: str) -> list[tuple[float, tuple[float, ..
                     f"design study GA ({history.relative_to(results.parent)}, evaluation {int(row['index'])})"
                 )
                 found.append((float(row["sigma_N"]), x, where))
-    comparison = results / "optimizers" / "evaluations.csv"
-    if comparison.exists():
+    for folder in COMPARISONS:
+        comparison = results / folder / "evaluations.csv"
+        if not comparison.exists():
+            continue
         for row in read_csv(comparison):
             if row["problem"] == problem and int(row["feasible"]):
                 x = tuple(float(v) for v in str(row["x_m"]).split())
                 where = (
-                    f"optimiser comparison {row['optimizer']} seed {row['seed']} (results/optimizers, run "
-                    f"{row['run']}, evaluation {int(row['index'])})"
+                    f"optimiser comparison {row['optimizer']} seed {int(row['seed'])} ({results.name}/{folder}, "
+                    f"run {int(row['run'])}, evaluation {int(row['index'])})"
                 )
                 found.append((float(row["sigma_N"]), x, where))
     return found
@@ -76,7 +81,7 @@ def best_known(results: Path, problem: str) -> BestKnown | None:
 
 def check_stamps(results: Path) -> None:
     """Refuse results made by another model than today's."""
-    for study in ("design", "optimizers"):
+    for study in ("design", *COMPARISONS):
         stamp = ModelStamp.read(results / study)
         if stamp is not None and not stamp.is_current():
             raise UsageError(f"{results / study}: made by another model (model.json); rerun the study first")

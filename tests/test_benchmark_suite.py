@@ -13,6 +13,7 @@ import pytest
 from catenary_env.pipeline import CONSTRAINTS
 from catenary_env.problems import PROBLEMS, get_problem
 from experiments import benchmark_views as bv
+from experiments import best_known
 from optimizers import RunStore, optimize
 from optimizers.catenary_adapter import STATISTICS, simulate_catenary_design
 from optimizers.store import SCHEMA_VERSION
@@ -77,6 +78,26 @@ def test_every_problem_with_variables_has_a_confirmed_best_known_design():
         assert abs(best.confirmed_sigma_N / best.sigma_N - 1.0) < 0.005, name  # the span-mode contract
         assert best.gap(1.02 * best.sigma_N) == pytest.approx(0.02)
     assert PROBLEMS["BPresag"].best_known is None
+
+
+def test_the_best_known_search_reads_the_design_study_and_both_comparisons(tmp_path):
+    """The lowest feasible σ wins wherever it was found; an infeasible row never does."""
+    results = tmp_path / "results"
+    history = results / "design" / "SW1" / "history.csv"
+    history.parent.mkdir(parents=True)
+    history.write_text("index,feasible,sigma_N,dh_1,dh_2,dh_3,dh_4\n7,1,22.0,-0.01,0,0,0\n", encoding="utf-8")
+    header = "run,optimizer,problem,seed,index,feasible,sigma_N,x_m\n"
+    for folder, row in [
+        ("optimizers", "3,cma,SW1,0,5,1,21.5,-0.01 0 0 -0.002\n"),
+        ("full-protocol/optimizers", "9,tpe,SW1,4,12,1,21.2,-0.01 -0.001 0 0\n4,gp,SW1,1,2,0,1.0,0 0 0 0\n"),
+    ]:
+        (results / folder).mkdir(parents=True)
+        (results / folder / "evaluations.csv").write_text(header + row, encoding="utf-8")
+    found = sorted(best_known.candidates(results, "SW1"))
+    assert [sigma for sigma, _, _ in found] == [21.2, 21.5, 22.0]
+    assert found[0][1] == (-0.01, -0.001, 0.0, 0.0)
+    assert "tpe seed 4 (results/full-protocol/optimizers, run 9, evaluation 12)" in found[0][2]
+    assert best_known.candidates(results, "B1") == []
 
 
 def test_the_best_known_design_is_served_only_for_its_model(monkeypatch):
