@@ -606,7 +606,7 @@ def views(
     ``fixed_budget.csv``, ``fixed_target.csv``, ``ranks.csv`` and ``ecdf.png`` (removing those an earlier
     write left where the runs give none); returns their Markdown, each heading with ``partial``
     (:func:`partial_share`) where it is not empty."""
-    for name in ("fixed_target.csv", "ranks.csv", "ecdf.png"):
+    for name in ("fixed_target.csv", "ranks.csv", "ranks_every_problem.csv", "ecdf.png"):
         (folder / name).unlink(missing_ok=True)
     suffix = f" (partial: {partial})" if partial else ""
     done = [r for r in runs if r["status"] == DONE]
@@ -644,7 +644,13 @@ def views(
             bv.ecdf(curves, lengths, best, budget), list(best), folder / "ecdf.png", labels, partial
         )
     if len(finals) >= 3:
-        parts.append(_rank_section(folder, finals, suffix))
+        parts.append(_rank_section(folder / "ranks.csv", finals, suffix))
+        # PPO runs on B1 and SW1 only: with it, the blocks are theirs; without it, every problem's.
+        narrow = sorted({r["optimizer"] for r in runs if r["status"] == NOT_RUN} & set(finals))
+        everywhere = {o: by_block for o, by_block in finals.items() if o not in narrow}
+        if narrow and len(everywhere) >= 3:
+            without = f", without {', '.join(narrow)} (not run on every problem)"
+            parts.append(_rank_section(folder / "ranks_every_problem.csv", everywhere, without + suffix))
     return "\n\n".join(parts)
 
 
@@ -659,9 +665,10 @@ def _best_known(curves: dict[str, Any], done: list[dict[str, Any]]) -> dict[str,
     return best
 
 
-def _rank_section(folder: Path, finals: dict[str, dict[tuple[str, int], float]], suffix: str) -> str:
-    """The rank tests over the blocks (problem, seed) where every optimiser has a finished run; none where
-    fewer than :data:`~experiments.benchmark_views.MIN_BLOCKS` are (a partial set)."""
+def _rank_section(path: Path, finals: dict[str, dict[tuple[str, int], float]], suffix: str) -> str:
+    """The rank tests over the blocks (problem, seed) where every optimiser of ``finals`` has a finished
+    run, their pairs written to ``path``; none where fewer than
+    :data:`~experiments.benchmark_views.MIN_BLOCKS` are (a partial set)."""
     blocks = bv.common_blocks(finals)
     if len(blocks) < bv.MIN_BLOCKS:
         return (
@@ -669,7 +676,7 @@ def _rank_section(folder: Path, finals: dict[str, dict[tuple[str, int], float]],
             f"on {len(blocks)} block(s) (problem, seed), fewer than {bv.MIN_BLOCKS}"
         )
     friedman, pairs = bv.rank_tests(finals)
-    write_csv(folder / "ranks.csv", pairs)
+    write_csv(path, pairs)
     ranks = sorted(friedman["mean_ranks"].items(), key=lambda item: item[1])
     significant = [f"{p['better']} better than {p['b'] if p['better'] == p['a'] else p['a']} "
                    f"(p = {p['p_holm']:.3f})" for p in pairs if p["significant"]]  # fmt: skip

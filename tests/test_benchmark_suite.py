@@ -14,6 +14,7 @@ from catenary_env.pipeline import CONSTRAINTS
 from catenary_env.problems import PROBLEMS, get_problem
 from experiments import benchmark_views as bv
 from experiments import best_known
+from experiments.common import read_csv
 from optimizers import RunStore, optimize
 from optimizers.catenary_adapter import STATISTICS, simulate_catenary_design
 from optimizers.store import SCHEMA_VERSION
@@ -152,6 +153,32 @@ def test_ranks_of_an_unequal_set_are_those_of_the_blocks_every_optimiser_has():
     assert bv.common_blocks(unequal) == [("P", 0)] and bv.common_blocks({}) == []
     with pytest.raises(ValueError, match="1 block"):
         bv.rank_tests(unequal)
+
+
+def test_an_optimiser_not_run_on_every_problem_gets_ranks_with_and_without_it(tmp_path):
+    """As PPO, which runs on B1 and SW1 only: the ranks with it are over the problems it runs on; a second
+    section ranks the others over every problem's blocks."""
+    from experiments.optimizer_comparison import DONE, NOT_RUN, views
+
+    finals = {"good": 1.0, "mid": 2.0, "bad": 3.0, "narrow": 2.5}
+    curves, runs = {}, []
+    for problem in ("P", "Q"):
+        for optimizer, final in finals.items():
+            if optimizer == "narrow" and problem == "Q":
+                runs.append({"status": NOT_RUN, "problem": problem, "optimizer": optimizer})
+                continue
+            curves.setdefault(problem, {})[optimizer] = np.array([[5.0, final + 0.01 * s] for s in range(4)])
+            run = {"status": DONE, "problem": problem, "optimizer": optimizer, "n_simulations": 2}
+            runs += [{**run, "seed": s, "budget": 2, "fidelity": "test"} for s in range(4)]
+    text = views(tmp_path, curves, runs)
+    assert "### Ranks over 4 blocks (problem, seed) by final best σ\n" in text
+    assert "mean rank (1 = best): good 1.00, mid 2.00, narrow 3.00, bad 4.00" in text
+    assert (
+        "### Ranks over 8 blocks (problem, seed) by final best σ, without narrow (not run on every problem)"
+        in text
+    )
+    assert "mean rank (1 = best): good 1.00, mid 2.00, bad 3.00" in text
+    assert {r["a"] for r in read_csv(tmp_path / "ranks_every_problem.csv")} == {"bad", "good"}
 
 
 def test_the_fixed_budget_and_target_views_read_each_optimisers_own_runs():
