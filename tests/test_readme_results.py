@@ -65,6 +65,20 @@ def test_the_committed_comparison_is_the_full_one_on_b1_and_sw1():
             assert {(r["status"], r["fidelity"], r["budget"]) for r in chosen} == {("done", "study", "300")}
 
 
+def test_the_readme_counts_the_full_protocols_committed_runs():
+    """While the full protocol runs, the README's "N of its M runs" is what its committed export holds."""
+    folder = ROOT / "results" / "full-protocol" / "optimizers"
+    first = (folder / "optimizers.md").read_text(encoding="utf-8").split("\n")[0]
+    readme = " ".join((ROOT / "README.md").read_text(encoding="utf-8").split())
+    done = sum(r["status"] == "done" for r in _rows(folder / "runs.csv"))
+    if first.startswith("Partial: "):
+        assert first.startswith(f"Partial: {done} of ")
+        total = first.split(" of ")[1].split(" runs")[0]
+        assert f"({done} of its {total} runs:" in readme
+    else:  # finished: the README no longer counts it as partial
+        assert " of its 590 runs" not in readme
+
+
 def _rl_tables() -> dict[str, str]:
     """The tables of ``results/rl/rl.md`` by their section title."""
     written = (ROOT / "results" / "rl" / "rl.md").read_text(encoding="utf-8")
