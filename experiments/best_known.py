@@ -56,8 +56,8 @@ def candidates(results: Path, problem: str) -> list[tuple[float, tuple[float, ..
             if row["problem"] == problem and int(row["feasible"]):
                 x = tuple(float(v) for v in str(row["x_m"]).split())
                 where = (
-                    f"optimiser comparison {row['optimizer']} seed {int(row['seed'])} ({results.name}/{folder}, "
-                    f"run {int(row['run'])}, evaluation {int(row['index'])})"
+                    f"optimiser comparison {row['optimizer']} seed {int(row['seed'])} "
+                    f"({results.name}/{folder}, run {int(row['run'])}, evaluation {int(row['index'])})"
                 )
                 found.append((float(row["sigma_N"]), x, where))
     return found
