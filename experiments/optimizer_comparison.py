@@ -603,9 +603,10 @@ def views(
     folder: Path, curves: dict[str, dict[str, np.ndarray]], runs: list[dict[str, Any]], partial: str = ""
 ) -> str:
     """The fixed-budget, fixed-target and rank views (:mod:`experiments.benchmark_views`); writes
-    ``fixed_budget.csv``, ``fixed_target.csv``, ``ranks.csv`` and ``ecdf.png`` (removing those an earlier
-    write left where the runs give none); returns their Markdown, each heading with ``partial``
-    (:func:`partial_share`) where it is not empty."""
+    ``fixed_budget.csv``, ``fixed_target.csv``, ``ranks.csv``, ``ranks_every_problem.csv`` (where an optimiser
+    is not run on some problem) and ``ecdf.png`` (removing those an earlier write left where the runs give
+    none); returns their Markdown, each heading with ``partial`` (:func:`partial_share`) where it is not
+    empty."""
     for name in ("fixed_target.csv", "ranks.csv", "ranks_every_problem.csv", "ecdf.png"):
         (folder / name).unlink(missing_ok=True)
     suffix = f" (partial: {partial})" if partial else ""
