@@ -54,6 +54,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from catenary_env.problems import PROBLEMS as DESIGN_PROBLEMS
+from optimizers.archive import archive_run, restore_runs
 from optimizers.base import OptimizationResult
 from optimizers.ga import GAOptions
 from optimizers.nevergrad_adapters import ngopt_fault
@@ -63,7 +64,7 @@ from optimizers.problem_registry import resolve_problem
 from optimizers.recorder import finished_result
 from optimizers.rl import policy_run_config
 from optimizers.runner import optimize, run_config
-from optimizers.store import RunConfig, RunStore, StoreError
+from optimizers.store import EXPORT_SOURCE, RunConfig, RunStore, StoreError
 from optimizers.synthetic import SYNTHETIC_PROBLEMS
 
 from . import benchmark_views as bv
@@ -134,6 +135,10 @@ class Config:
         Write the results from the runs that finished in the run store, simulating nothing and starting or
         resuming no run (the store is only read: lanes may be running into it); every other run of the
         protocol is a line "not run yet" with the simulations the store holds of it.
+    archive : Path or None
+        A run archive (:mod:`optimizers.archive`): the runs it holds and the store does not are restored
+        into the store first, and every run of the protocol that finished is written into it (if not there
+        yet), so that a protocol lasting days can be committed as it goes and resumed on a fresh checkout.
     """
 
     full: bool = False
@@ -143,6 +148,7 @@ class Config:
     problems: tuple[str, ...] = None  # type: ignore[assignment]  (set in __post_init__)
     optimizers: tuple[str, ...] = OPTIMIZERS
     from_store: bool = False
+    archive: Path | None = None
 
     def __post_init__(self) -> None:
         if self.problems is None:
@@ -183,6 +189,9 @@ def main(config: Config) -> Path:
     run_rows: list[dict[str, Any]] = []
     reference_rows: list[dict[str, Any]] = []
     with _open_store(store_path, config.from_store) as store:
+        if config.archive is not None and not config.from_store:
+            restored = restore_runs(store, config.archive)
+            print(f"{restored} run(s) restored from {config.archive} into {store_path}", file=sys.stderr)
         for problem in config.problems:
             reference_rows += _reference_rows(store, config, problem)
             for optimizer in config.optimizers:
@@ -277,6 +286,8 @@ def _protocol_run(
         result, note = _run(store, config, optimizer, problem, seed, note)
         if result is None:
             return _not_run_row(config, optimizer, problem, seed, note), []
+    if config.archive is not None and result.run_id is not None:
+        archive_run(store, result.run_id, config.archive)
     rows = _evaluation_rows(store, result, problem)
     return _run_row(config, result, problem, rows, note), rows
 
@@ -339,6 +350,8 @@ def _evaluation_rows(store: RunStore, result: OptimizationResult, problem: str) 
             key = space.design_key(record.x)
             source = "env" if result.optimizer == "ppo" else "simulation"
             found = store.lookup(space.store_key, key, record.speed_kmh, result.fidelity, source)
+            if found is None:  # a run rebuilt from an export: its simulation's row is one too
+                found = store.lookup(space.store_key, key, record.speed_kmh, result.fidelity, EXPORT_SOURCE)
             simulation_time = found.wall_time if found is not None else 0.0
         else:
             simulation_time = record.wall_time
@@ -781,6 +794,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="simulate nothing: write the tables, figures and IOHprofiler files from the runs of the "
         "protocol that finished in the store (read only, so lanes may be running into it), and list every "
         "other run as 'not run yet' with the simulations the store holds of it",
+    )  # fmt: skip
+    parser.add_argument(
+        "--archive", type=Path, default=None, metavar="FOLDER",
+        help="a run archive: restore its runs into the store first, and write every finished run of the "
+        "protocol into it (one file a run, committed as the protocol goes; docs/problems.md)",
     )  # fmt: skip
 
 

@@ -47,7 +47,15 @@ from catenary_env.errors import CatenaryError
 from .base import EvaluationRecord
 from .problem import Outcome
 
-__all__ = ["APPLICATION_ID", "SCHEMA_VERSION", "RunConfig", "RunStore", "StoreError", "StoredEvaluation"]
+__all__ = [
+    "APPLICATION_ID",
+    "EXPORT_SOURCE",
+    "SCHEMA_VERSION",
+    "RunConfig",
+    "RunStore",
+    "StoreError",
+    "StoredEvaluation",
+]
 
 APPLICATION_ID = 0x43415445
 """SQLite ``application_id`` of a run store: the bytes ``CATE``."""
@@ -57,6 +65,12 @@ SCHEMA_VERSION = 2
 ``constraints`` and ``statistics`` (JSON lists of the problem's constraint values and contact-force
 statistics); a version-1 store is upgraded in place when opened for writing (the columns added, its old rows
 without those values) and read as it is when opened read-only."""
+
+EXPORT_SOURCE = "export"
+"""The ``source`` of evaluations rebuilt from a results export (the runs' ``evaluations.csv``) where the store
+that made them was lost: each keeps its design, σ, feasibility, charge and times, but not its reason,
+constraint values or statistics, so they are read back as their runs' history and never served as cache (a
+constraint-aware optimiser served one would be told less than a simulation tells it)."""
 
 _ADDED_IN_2 = ("constraints", "statistics")
 """The evaluations' columns that schema version 2 added."""
@@ -214,7 +228,8 @@ class RunStore:
                 connection.close()
                 raise StoreError(f"{self.path}: an empty file, not a run store (yet)")
             self._create()
-        elif application_id != APPLICATION_ID:
+            application_id = connection.execute("PRAGMA application_id").fetchone()[0]
+        if application_id != APPLICATION_ID:
             connection.close()
             raise StoreError(
                 f"{self.path}: an SQLite database that is not a catenary-env run store (application_id "
@@ -266,15 +281,25 @@ class RunStore:
                 )
 
     def _create(self) -> None:
-        with self._connection:
-            self._connection.executescript(_SCHEMA)
-            self._connection.execute(f"PRAGMA application_id = {APPLICATION_ID}")
-            self._connection.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
-            self._connection.execute(
-                "INSERT INTO meta (key, value) "
-                "VALUES ('format', 'catenary-env run store'), ('created_at', ?)",
-                (_now(),),
-            )
+        """Write the schema into a new file, under an exclusive lock and only if no other process has
+        written it meanwhile: the lanes of a study started together all open the same new store."""
+        connection = self._connection
+        connection.execute("BEGIN EXCLUSIVE")
+        try:
+            if connection.execute("SELECT count(*) FROM sqlite_master").fetchone()[0] == 0:
+                for statement in filter(str.strip, _SCHEMA.split(";")):
+                    connection.execute(statement)
+                connection.execute(f"PRAGMA application_id = {APPLICATION_ID}")
+                connection.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+                connection.execute(
+                    "INSERT INTO meta (key, value) "
+                    "VALUES ('format', 'catenary-env run store'), ('created_at', ?)",
+                    (_now(),),
+                )
+            connection.commit()
+        except BaseException:
+            connection.rollback()
+            raise
 
     # -- runs ----------------------------------------------------------------------------------------------
 
@@ -330,6 +355,61 @@ class RunStore:
         cursor = self._connection.execute("SELECT * FROM runs ORDER BY run_id")
         names = [column[0] for column in cursor.description]
         return [dict(zip(names, row, strict=True)) for row in cursor.fetchall()]
+
+    def run_rows(self, run_id: int) -> tuple[dict[str, object], list[dict[str, object]]]:
+        """A run's row (with its ``run_id``) and its evaluation rows in order (without it), every column as
+        stored: what :meth:`add_run_rows` writes into another store."""
+        cursor = self._connection.execute("SELECT * FROM runs WHERE run_id = ?", (run_id,))
+        names = [column[0] for column in cursor.description]
+        found = cursor.fetchone()
+        if found is None:
+            raise StoreError(f"{self.path}: no run {run_id}")
+        run = dict(zip(names, found, strict=True))
+        cursor = self._connection.execute(
+            "SELECT * FROM evaluations WHERE run_id = ? ORDER BY idx", (run_id,)
+        )
+        names = [column[0] for column in cursor.description]
+        rows = [
+            {name: value for name, value in zip(names, row, strict=True) if name != "run_id"}
+            for row in cursor.fetchall()
+        ]
+        return run, rows
+
+    def add_run_rows(self, run: dict[str, object], rows: list[dict[str, object]]) -> int:
+        """Write a run and its evaluations as :meth:`run_rows` gives them (from this store or another), in
+        one transaction; return its id here: its ``run_id`` where that is free here (a store restored into
+        a new file numbers its runs as the one it came from did), else a new one.
+
+        Raises
+        ------
+        StoreError
+            A column that is not the schema's (the rows come from a file).
+        """
+        schema = _schema_columns()
+        unknown = set(run) - schema["runs"] | {c for row in rows for c in row} - (
+            schema["evaluations"] - {"run_id"}
+        )
+        if unknown:
+            raise StoreError(f"{self.path}: not columns of a run store to write: {sorted(unknown)}")
+        taken = (
+            "run_id" in run
+            and self._connection.execute("SELECT 1 FROM runs WHERE run_id = ?", (run["run_id"],)).fetchone()
+        )
+        with self._connection:
+            run_id = self._insert("runs", {k: v for k, v in run.items() if not (taken and k == "run_id")})
+            for row in rows:
+                self._insert("evaluations", {"run_id": run_id, **row})
+        return run_id
+
+    def _insert(self, table: str, row: dict[str, object]) -> int:
+        """Insert a row of named columns (checked against the schema by the caller); its rowid."""
+        columns = sorted(row)
+        cursor = self._connection.execute(
+            f"INSERT INTO {table} ({', '.join(columns)}) VALUES ({', '.join('?' * len(columns))})",
+            [row[c] for c in columns],
+        )
+        assert cursor.lastrowid is not None
+        return int(cursor.lastrowid)
 
     def run_progress(self) -> list[dict[str, object]]:
         """Every run's columns (:meth:`runs`) and its progress: ``evaluations`` stored, ``simulations``
