@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -189,6 +190,9 @@ def main(config: Config) -> Path:
     run_rows: list[dict[str, Any]] = []
     reference_rows: list[dict[str, Any]] = []
     with _open_store(store_path, config.from_store) as store:
+        if config.archive is not None:
+            Path(config.archive).mkdir(parents=True, exist_ok=True)
+            stamp_study(config.archive, catenaries_of(config.problems))  # the runs it will hold (its files)
         if config.archive is not None and not config.from_store:
             restored = restore_runs(store, config.archive)
             print(f"{restored} run(s) restored from {config.archive} into {store_path}", file=sys.stderr)
@@ -657,6 +661,13 @@ def views(
         bv.ecdf_figure(
             bv.ecdf(curves, lengths, best, budget), list(best), folder / "ecdf.png", labels, partial
         )
+    if partial:  # an optimiser just started would leave the ranks only the few blocks it has finished
+        fewest = min(Counter((r["problem"], r["optimizer"]) for r in runs).values())
+        started = {o: len(by_block) for o, by_block in finals.items() if len(by_block) < fewest}
+        finals = {o: by_block for o, by_block in finals.items() if o not in started}
+        if started:
+            left_out = ", ".join(f"{o} ({n} finished)" for o, n in sorted(started.items()))
+            suffix += f"; left out until they have finished {fewest} runs (one problem's seeds): {left_out}"
     if len(finals) >= 3:
         parts.append(_rank_section(folder / "ranks.csv", finals, suffix))
         # PPO runs on B1 and SW1 only: with it, the blocks are theirs; without it, every problem's.

@@ -12,7 +12,8 @@ Each file is gzip-compressed JSON (written without a timestamp, so the same run 
 ``NaN``).
 Its path is ``<problem>/<optimizer>-seed<seed>-<digest>.json.gz``, where ``<problem>`` is the store's name
 of the problem (with its model's fingerprint, ``B1@362f3bf2265f``) and ``<digest>`` is a hash of the run's
-whole configuration (:class:`~optimizers.store.RunConfig`, options and version included).
+whole configuration (:class:`~optimizers.store.RunConfig`, options and version included). Files of
+other kinds in the folder (the study's ``model.json``) are left alone.
 
 Examples
 --------

@@ -305,7 +305,7 @@ def test_from_store_writes_the_finished_runs_and_simulates_nothing(tmp_path, mon
     from experiments.cli.report import build_report
 
     made = optimizer_comparison.Config(
-        out=tmp_path, problems=(SYNTHETIC,), optimizers=("random", "cma", "de")
+        out=tmp_path, problems=(SYNTHETIC,), optimizers=("random", "cma", "de", "ga")
     )
     folder = optimizer_comparison.main(made)
     full_rows = (folder / "evaluations.csv").read_text(encoding="utf-8").splitlines()
@@ -316,7 +316,7 @@ def test_from_store_writes_the_finished_runs_and_simulates_nothing(tmp_path, mon
     _no_simulation(monkeypatch)
     for name in ("optimize", "train_policy"):  # a resumed run would replay without simulating: refuse it too
         monkeypatch.setattr(optimizer_comparison, name, lambda *a, **k: pytest.fail("a run was made"))
-    args = "--optimizers random cma de pso --from-store --out".split() + [str(tmp_path)]
+    args = "--optimizers random cma de ga pso --from-store --out".split() + [str(tmp_path)]
     config = config_from(
         optimizer_comparison.Config, study_parser(optimizer_comparison, "x").parse_args(args)
     )
@@ -326,7 +326,7 @@ def test_from_store_writes_the_finished_runs_and_simulates_nothing(tmp_path, mon
 
     runs = {(r["optimizer"], int(r["seed"])): r for r in read_csv(folder / "runs.csv")}
     done = {key for key, r in runs.items() if r["status"] == "done"}
-    assert done == {("random", 0), ("random", 1), ("cma", 0), ("de", 0), ("de", 1)}
+    assert done == {("random", 0), ("random", 1), ("cma", 0), ("de", 0), ("de", 1), ("ga", 0), ("ga", 1)}
     killed = runs[("cma", 1)]
     assert (killed["status"], killed["n_simulations"]) == ("not run yet", 5)  # CMA-ES charges each design
     assert "5 of its 12 simulations in the store" in killed["note"]
@@ -339,17 +339,23 @@ def test_from_store_writes_the_finished_runs_and_simulates_nothing(tmp_path, mon
     assert written == kept  # the finished runs' rows, as the study wrote them when it made the runs
 
     text = (folder / "optimizers.md").read_text(encoding="utf-8")
-    assert text.startswith("Partial: 5 of 8 runs of the protocol finished")
+    assert text.startswith("Partial: 7 of 10 runs of the protocol finished")
     assert (
         f"- not run yet on {SYNTHETIC} (runs of each optimiser): cma 1 (5 simulations in the store), pso 2"
         in text
     )
     summary = {r["optimizer"]: r["runs"] for r in read_csv(folder / "summary.csv")}
-    assert summary == {"random": 2, "cma": 1, "de": 2}
-    assert "not computed: the 3 optimisers have finished runs in common on 1 block(s)" in text
-    assert not (folder / "ranks.csv").exists()
-    assert _check_ioh(folder / "ioh", (SYNTHETIC,), made.budget) == 5
-    assert "Partial: 5 of 8 runs" in build_report(tmp_path).read_text(encoding="utf-8")  # catenary report
+    assert summary == {"random": 2, "cma": 1, "de": 2, "ga": 2}
+    # CMA-ES, one run finished of its two, would leave the ranks one block: they are made without it
+    assert (
+        "### Ranks over 2 blocks (problem, seed) by final best σ (partial: 7 of 10 runs); left out until "
+        "they have finished 2 runs (one problem's seeds): cma (1 finished)" in text
+    )
+    assert {p["a"] for p in read_csv(folder / "ranks.csv")} | {
+        p["b"] for p in read_csv(folder / "ranks.csv")
+    } == {"random", "de", "ga"}
+    assert _check_ioh(folder / "ioh", (SYNTHETIC,), made.budget) == 7
+    assert "Partial: 7 of 10 runs" in build_report(tmp_path).read_text(encoding="utf-8")  # catenary report
 
 
 def test_from_store_on_a_protocol_not_started_yet(tmp_path, monkeypatch):
