@@ -1,5 +1,5 @@
 """Rebuild the run archive of the optimiser comparison from a results export, where the run store that made
-the runs was lost (docs/problems.md, 'Reading the comparison').
+the runs was lost (docs/problems.md, 'Experiments').
 
 The export's ``evaluations.csv`` keeps, for each evaluation of a finished run, its design, σ, feasibility,
 charge, cache flag and times; its ``runs.csv`` keeps each run's stop reason. The run's identity in the store

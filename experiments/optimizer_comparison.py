@@ -55,7 +55,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from catenary_env.problems import PROBLEMS as DESIGN_PROBLEMS
-from optimizers.archive import archive_run, restore_runs
+from optimizers.archive import archive_run, restore_runs, snapshot_run
 from optimizers.base import OptimizationResult
 from optimizers.ga import GAOptions
 from optimizers.nevergrad_adapters import ngopt_fault
@@ -139,7 +139,8 @@ class Config:
     archive : Path or None
         A run archive (:mod:`optimizers.archive`): the runs it holds and the store does not are restored
         into the store first, and every run of the protocol that finished is written into it (if not there
-        yet), so that a protocol lasting days can be committed as it goes and resumed on a fresh checkout.
+        yet), so that a protocol lasting days can be committed as it goes and resumed on a fresh checkout;
+        with ``from_store``, each run of the protocol still going is kept there as a snapshot.
     """
 
     full: bool = False
@@ -285,6 +286,9 @@ def _protocol_run(
     if config.from_store:
         result, held, pending = _stored_run(store, prepared.identity, prepared.space)
         if result is None:
+            run_id = store.find_run(prepared.identity) if held and config.archive is not None else None
+            if run_id is not None:  # a run going on: what it has so far, for a new checkout to resume
+                snapshot_run(store, run_id, config.archive)
             return _not_run_row(config, optimizer, problem, seed, pending, NOT_RUN_YET, held), []
     else:
         result, note = _run(store, config, optimizer, problem, seed, note)
@@ -809,7 +813,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--archive", type=Path, default=None, metavar="FOLDER",
         help="a run archive: restore its runs into the store first, and write every finished run of the "
-        "protocol into it (one file a run, committed as the protocol goes; docs/problems.md)",
+        "protocol into it (one file a run, committed as the protocol goes; docs/problems.md); with "
+        "--from-store, also a snapshot of each run still going",
     )  # fmt: skip
 
 

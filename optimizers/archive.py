@@ -11,9 +11,14 @@ Each file is gzip-compressed JSON (written without a timestamp, so the same run 
 ``rows`` its evaluations in order, every column as stored (floats as JSON writes them, exactly; NaN as
 ``NaN``).
 Its path is ``<problem>/<optimizer>-seed<seed>-<digest>.json.gz``, where ``<problem>`` is the store's name
-of the problem (with its model's fingerprint, ``B1@362f3bf2265f``) and ``<digest>`` is a hash of the run's
+of the problem (with its model's fingerprint, ``B1@64e3ab672ccb``) and ``<digest>`` is a hash of the run's
 whole configuration (:class:`~optimizers.store.RunConfig`, options and version included). Files of
 other kinds in the folder (the study's ``model.json``) are left alone.
+
+A run still going can be kept too, as a snapshot (:func:`snapshot_run`, ``...-<digest>.partial.json.gz``,
+rewritten at each snapshot): restored into a store that lacks the run, it is an interrupted run, which its
+study resumes from there (the snapshot's evaluations replayed, not simulated). A session that ends mid-run
+then loses only what came after its last snapshot. When the run finishes, its file replaces the snapshot.
 
 Examples
 --------
@@ -43,53 +48,86 @@ from typing import Any
 
 from .store import RunConfig, RunStore, StoreError
 
-__all__ = ["FORMAT", "archive_path", "archive_run", "restore_runs", "write_run_file"]
+__all__ = [
+    "FORMAT",
+    "PARTIAL",
+    "archive_path",
+    "archive_run",
+    "restore_runs",
+    "snapshot_run",
+    "write_run_file",
+]
 
 FORMAT = {"format": "catenary-env run", "version": 1}
 """The marker of a run file."""
 
 
-def archive_path(folder: str | Path, run: dict[str, Any]) -> Path:
-    """Where a run (its row of the store) is kept in an archive folder."""
+PARTIAL = ".partial.json.gz"
+"""The end of a snapshot's file name (a run not finished yet)."""
+
+
+def archive_path(folder: str | Path, run: dict[str, Any], partial: bool = False) -> Path:
+    """Where a run (its row of the store) is kept in an archive folder; ``partial``: its snapshot."""
     config = _config(run)
     digest = hashlib.sha256(json.dumps(list(config)).encode()).hexdigest()[:12]
-    return Path(folder) / config.problem / f"{config.optimizer}-seed{config.seed}-{digest}.json.gz"
+    name = f"{config.optimizer}-seed{config.seed}-{digest}" + (PARTIAL if partial else ".json.gz")
+    return Path(folder) / config.problem / name
 
 
 def archive_run(store: RunStore, run_id: int, folder: str | Path) -> Path:
-    """Write a finished run of the store into the archive folder (once: a file already there is kept);
-    return its path.
+    """Write a finished run of the store into the archive folder (once: a file already there is kept), and
+    remove its snapshot; return its path.
 
     Raises
     ------
     StoreError
-        The run has not finished.
+        The run has not finished (:func:`snapshot_run` keeps such a run).
     """
     run, rows = store.run_rows(run_id)
     if run["stop_reason"] is None:
         raise StoreError(f"{store.path}: run {run_id} has not finished; only finished runs are archived")
-    return write_run_file(folder, run, rows)
+    path = write_run_file(folder, run, rows)
+    archive_path(folder, run, partial=True).unlink(missing_ok=True)
+    return path
+
+
+def snapshot_run(store: RunStore, run_id: int, folder: str | Path) -> Path:
+    """Write what the store holds of a run not finished yet into the archive folder, replacing its earlier
+    snapshot; return its path.
+
+    Raises
+    ------
+    StoreError
+        The run has finished (:func:`archive_run` keeps it).
+    """
+    run, rows = store.run_rows(run_id)
+    if run["stop_reason"] is not None:
+        raise StoreError(f"{store.path}: run {run_id} has finished: archive it, not a snapshot of it")
+    return _write(archive_path(folder, run, partial=True), run, rows)
 
 
 def write_run_file(folder: str | Path, run: dict[str, Any], rows: list[dict[str, Any]]) -> Path:
     """Write a finished run (its row and its evaluation rows, as :meth:`RunStore.run_rows` gives them) into
     the archive folder, once: a file already there is kept; return its path."""
     path = archive_path(folder, run)
-    if path.is_file():
-        return path
+    return path if path.is_file() else _write(path, run, rows)
+
+
+def _write(path: Path, run: dict[str, Any], rows: list[dict[str, Any]]) -> Path:
     columns = sorted(rows[0]) if rows else []
     content = {**FORMAT, "run": run, "columns": columns, "rows": [[row[c] for c in columns] for row in rows]}
     path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(path.name + ".part")
-    with gzip.GzipFile(partial, "wb", mtime=0) as file:  # mtime 0: the same run, the same bytes
+    temporary = path.with_name(path.name + ".part")
+    with gzip.GzipFile(temporary, "wb", mtime=0) as file:  # mtime 0: the same run, the same bytes
         file.write(json.dumps(content, sort_keys=True).encode())
-    partial.replace(path)  # a file in the archive is whole: an interrupted write leaves only the .part
+    temporary.replace(path)  # a file in the archive is whole: an interrupted write leaves only the .part
     return path
 
 
 def restore_runs(store: RunStore, folder: str | Path) -> int:
-    """Write into the store every archived run it does not hold (a run of the same configuration, finished
-    or not, is kept as it is); return how many were written. Nothing happens for a missing folder.
+    """Write into the store every archived run it does not hold, finished or (from its snapshot) not (a run
+    of the same configuration in the store, finished or not, is kept as it is); return how many were
+    written. Nothing happens for a missing folder.
 
     Raises
     ------
@@ -97,8 +135,11 @@ def restore_runs(store: RunStore, folder: str | Path) -> int:
         A file of the folder is not a run file (its path names it), or the store holds the run as made by
         another package version.
     """
+    paths = sorted(Path(folder).glob("*/*.json.gz"))
+    finished = {p for p in paths if not p.name.endswith(PARTIAL)}
+    snapshots = [p for p in paths if p.name.endswith(PARTIAL) and _finished_path(p) not in finished]
     restored = 0
-    for path in sorted(Path(folder).glob("*/*.json.gz")):
+    for path in sorted(finished) + snapshots:  # a run's file, else its snapshot
         run, rows = _read(path)
         if store.find_run(_config(run)) is None:
             store.add_run_rows(run, rows)
@@ -118,6 +159,10 @@ def _read(path: Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     except (OSError, ValueError, KeyError, TypeError) as error:
         raise StoreError(f"{path}: not a readable run file of a run archive ({error})") from None
     return run, rows
+
+
+def _finished_path(snapshot: Path) -> Path:
+    return snapshot.with_name(snapshot.name.removesuffix(PARTIAL) + ".json.gz")
 
 
 def _config(run: dict[str, Any]) -> RunConfig:

@@ -15,7 +15,8 @@ filtered contact force; null where no passage was simulated), one column per con
 contact force (``mean_stat``, ``std_stat`` (σ again), ``statistical_max_stat``, ... in N,
 ``contact_loss_percent_stat`` in %, ``max_support_uplift_stat`` in m; null where not simulated, or stored
 before the run store kept them), ``wall_time_s``, ``cached``,
-``charged``, ``source`` (``simulation``; ``env`` for an RL run's env steps), ``reward`` (RL runs),
+``charged``, ``source`` (``simulation``; ``env`` for an RL run's env steps; ``export`` for a row rebuilt
+from a results export, :data:`optimizers.store.EXPORT_SOURCE`), ``reward`` (RL runs),
 ``package_version``, ``created_at``.
 """
 

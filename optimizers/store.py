@@ -222,13 +222,13 @@ class RunStore:
     def _open(self) -> None:
         connection = self._connection
         application_id = connection.execute("PRAGMA application_id").fetchone()[0]
+        if application_id == 0 and not self.read_only:
+            self._create()  # the schema, if the file is empty (another process may just have written it)
+            application_id = connection.execute("PRAGMA application_id").fetchone()[0]
         n_tables = connection.execute("SELECT count(*) FROM sqlite_master").fetchone()[0]
         if application_id == 0 and n_tables == 0:
-            if self.read_only:
-                connection.close()
-                raise StoreError(f"{self.path}: an empty file, not a run store (yet)")
-            self._create()
-            application_id = connection.execute("PRAGMA application_id").fetchone()[0]
+            connection.close()
+            raise StoreError(f"{self.path}: an empty file, not a run store (yet)")
         if application_id != APPLICATION_ID:
             connection.close()
             raise StoreError(

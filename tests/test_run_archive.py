@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import gzip
 import json
+import shutil
+import sqlite3
 import threading
 from pathlib import Path
 
@@ -18,7 +20,7 @@ from experiments import optimizer_comparison  # noqa: E402
 from experiments.archive_from_export import archive_from_export  # noqa: E402
 from experiments.common import read_csv  # noqa: E402
 from optimizers import synthetic  # noqa: E402
-from optimizers.archive import archive_run, restore_runs  # noqa: E402
+from optimizers.archive import archive_path, archive_run, restore_runs, snapshot_run  # noqa: E402
 from optimizers.problem import GridSpace  # noqa: E402
 from optimizers.problem_registry import resolve_problem  # noqa: E402
 from optimizers.store import EXPORT_SOURCE, RunConfig, RunStore, StoreError  # noqa: E402
@@ -31,6 +33,13 @@ def _comparison(out: Path, **options) -> Path:
         out=out, problems=(SYNTHETIC,), optimizers=("random", "cma"), **options
     )
     return optimizer_comparison.main(config)
+
+
+def _untimed(path: Path) -> list[list[str]]:
+    """The rows of an evaluations.csv, as written, without the seconds they took."""
+    rows = [line.split(",") for line in path.read_text(encoding="utf-8").splitlines()]
+    kept = [i for i, name in enumerate(rows[0]) if not name.endswith("time_s")]
+    return [[row[i] for i in kept] for row in rows]
 
 
 def _refuse_simulations(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -120,6 +129,18 @@ def test_an_export_rebuilds_its_finished_runs_which_are_never_served_as_cache(tm
     assert (again / "evaluations.csv").read_text() == (export / "evaluations.csv").read_text()
     assert read_csv(again / "runs.csv") == read_csv(export / "runs.csv")
 
+    pq = pytest.importorskip("pyarrow.parquet")  # the dataset export says which rows were rebuilt
+    from optimizers.dataset import export_store
+
+    (table,) = [
+        pq.read_table(path)
+        for path in export_store(rebuilt / "runs.sqlite", tmp_path / "dataset")
+        if path.suffix == ".parquet"
+    ]
+    rebuilt_rows = [r for r in table.to_pylist() if r["source"] == EXPORT_SOURCE]
+    assert len(rebuilt_rows) == len(read_csv(export / "evaluations.csv"))
+    assert all(r.get("constraint_excess_m") is None for r in rebuilt_rows)  # not kept: not invented
+
 
 def test_processes_opening_a_new_store_together_all_get_it(tmp_path):
     """The lanes of a study started together open the same new file: one creates the schema, none fails."""
@@ -142,3 +163,60 @@ def test_processes_opening_a_new_store_together_all_get_it(tmp_path):
     assert errors == []
     with RunStore(path, read_only=True) as store:
         assert store.runs() == []
+
+
+def test_the_committed_archive_holds_every_finished_run_of_the_committed_export():
+    """Each run the full protocol's export counts as finished is in the committed archive, with the same
+    simulations and best σ: a fresh checkout resumes the protocol from it."""
+    root = Path(__file__).resolve().parents[1] / "results" / "full-protocol"
+    done = [r for r in read_csv(root / "optimizers" / "runs.csv") if r["status"] == "done"]
+    assert done
+    for line in done:
+        (path,) = root.glob(
+            f"archive/{line['problem']}@*/{line['optimizer']}-seed{int(line['seed'])}-*.json.gz"
+        )
+        with gzip.open(path, "rb") as file:
+            content = json.loads(file.read())
+        rows = [dict(zip(content["columns"], row, strict=True)) for row in content["rows"]]
+        assert content["run"]["stop_reason"] == line["stop_reason"]
+        assert sum(r["charged"] for r in rows) == line["n_simulations"]
+        assert min(r["sigma"] for r in rows if r["feasible"]) == pytest.approx(
+            line["best_sigma_N"], rel=1e-12
+        )
+
+
+def test_a_run_going_on_is_kept_as_a_snapshot_and_resumed_from_it(tmp_path, monkeypatch):
+    """``--from-store`` with an archive keeps a run not finished as a snapshot; a fresh checkout restores it
+    as an interrupted run and its study finishes it, replaying the snapshot's evaluations (not simulating
+    them); the finished run's file then replaces the snapshot."""
+    archive = tmp_path / "archive"
+    made = tmp_path / "made.csv"
+    shutil.copy(_comparison(tmp_path / "a", archive=archive) / "evaluations.csv", made)
+    store_path = tmp_path / "a" / "runs.sqlite"
+    with RunStore(store_path) as store:
+        (cma,) = [r for r in store.runs() if r["optimizer"] == "cma" and r["seed"] == 1]
+        config = RunConfig(*(cma[f] for f in RunConfig._fields))
+        finished = archive_path(archive, cma)
+    finished.unlink()  # as if the run had been killed after 5 evaluations, and never archived
+    with sqlite3.connect(store_path) as connection:
+        connection.execute(
+            "UPDATE runs SET finished_at = NULL, stop_reason = NULL WHERE run_id = ?", (cma["run_id"],)
+        )
+        connection.execute("DELETE FROM evaluations WHERE run_id = ? AND idx >= 5", (cma["run_id"],))
+    _comparison(tmp_path / "a", archive=archive, from_store=True)
+    snapshot = archive_path(archive, cma, partial=True)
+    assert snapshot.is_file() and not finished.exists()
+
+    simulated = []
+    simulate = synthetic.simulate_quadratic
+    monkeypatch.setattr(
+        synthetic, "simulate_quadratic", lambda p, x, *a: simulated.append(x) or simulate(p, x, *a)
+    )
+    second = _comparison(tmp_path / "b", archive=archive)
+    assert (
+        len(simulated) == 1 + 12 - 5
+    )  # the reference design, and the run's evaluations after the snapshot's
+    assert _untimed(second / "evaluations.csv") == _untimed(made)  # the new simulations took their own time
+    assert finished.is_file() and not snapshot.exists()
+    with RunStore(tmp_path / "b" / "runs.sqlite") as store, pytest.raises(StoreError, match="has finished"):
+        snapshot_run(store, store.find_run(config), archive)
