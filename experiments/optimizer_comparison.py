@@ -285,17 +285,15 @@ def _protocol_run(
     note = prepared.note
     if config.from_store:
         result, held, pending = _stored_run(store, prepared.identity, prepared.space)
+        if config.archive is not None and (result is not None or held):  # (made here: kept as it goes)
+            keep = archive_run if result is not None else snapshot_run  # a run going on: what it has so far
+            keep(store, int(store.find_run(prepared.identity)), config.archive)  # type: ignore[arg-type]
         if result is None:
-            run_id = store.find_run(prepared.identity) if held and config.archive is not None else None
-            if run_id is not None:  # a run going on: what it has so far, for a new checkout to resume
-                snapshot_run(store, run_id, config.archive)
             return _not_run_row(config, optimizer, problem, seed, pending, NOT_RUN_YET, held), []
     else:
         result, note = _run(store, config, optimizer, problem, seed, note)
         if result is None:
             return _not_run_row(config, optimizer, problem, seed, note), []
-    if config.archive is not None and result.run_id is not None:
-        archive_run(store, result.run_id, config.archive)
     rows = _evaluation_rows(store, result, problem)
     return _run_row(config, result, problem, rows, note), rows
 
@@ -308,14 +306,14 @@ def _run(
     if optimizer == "ppo":
         _, result = train_policy(
             store, problem, config.budget, seed, options, config.fidelity, speed_kmh=SPEED_KMH,
-            quiet=not config.full,
+            quiet=not config.full, archive=config.archive,
         )  # fmt: skip
         return result, note
     try:
         result = optimize(
             problem, optimizer, config.budget, seed, speed_kmh=SPEED_KMH, fidelity=config.fidelity,
             options=options, store=store, resume=True, start_if_none=True, n_workers=config.workers,
-            quiet=not config.full,
+            quiet=not config.full, archive=config.archive,
         )  # fmt: skip
     except TypeError as error:
         fault = ngopt_fault()

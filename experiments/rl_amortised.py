@@ -55,6 +55,7 @@ from typing import Any
 
 import numpy as np
 
+from optimizers.archive import restore_runs
 from optimizers.base import OptimizationResult
 from optimizers.ga import POPULATION_SIZES, GAOptions
 from optimizers.problem_registry import resolve_problem
@@ -121,6 +122,10 @@ class Config:
         Of :data:`optimizers.rl.LEARNERS`.
     seeds : tuple of int
         Seeds of each learner; default 0, 1, 2 (quick: 0).
+    archive : Path or None
+        A run archive (:mod:`optimizers.archive`): its runs are restored into the store first, and each GA
+        run and policy goes into it as it finishes, with a snapshot every ten minutes while it runs, so that
+        a study of many hours is resumed on a fresh checkout from its last snapshot.
     """
 
     full: bool = False
@@ -131,6 +136,7 @@ class Config:
     problems: tuple[str, ...] = ()
     learners: tuple[str, ...] = tuple(LEARNERS)
     seeds: tuple[int, ...] = ()
+    archive: Path | None = None
 
     def __post_init__(self) -> None:
         if not self.problems:
@@ -199,6 +205,11 @@ def main(config: Config) -> Path:
     tables: dict[str, list[dict[str, Any]]] = {k: [] for k in ("steps", "ga", "curves", "designs")}
     store_path = config.store or Path(config.out) / STORE
     with RunStore(store_path) as store:
+        if config.archive is not None:
+            Path(config.archive).mkdir(parents=True, exist_ok=True)
+            restored = restore_runs(store, config.archive)
+            print(f"{restored} run(s) restored from {config.archive} into {store_path}", file=sys.stderr)
+            stamp_study(config.archive, catenaries_of(config.problems))
         for problem in config.problems:
             check_starts_at_reference(problem)
             _reference_designs(store, config, problem, tables["designs"])
@@ -256,7 +267,7 @@ def _ga_runs(store: RunStore, config: Config, problem: str, tables: dict[str, li
         result = optimize(
             problem, "ga", config.ga_budget, 0, speed_kmh=speed, fidelity=config.fidelity,
             options=config.ga_options(problem), store=store, resume=True, start_if_none=True,
-            n_workers=config.workers, quiet=not config.full,
+            n_workers=config.workers, quiet=not config.full, archive=config.archive,
         )  # fmt: skip
         tables["ga"].append(
             {
@@ -305,7 +316,7 @@ def _policy(
     design_problem = resolve_problem(problem)
     policy, result = train_design_policy(
         spec, design_problem, config.policy_budget, seed, options=options, store=store, resume=True,
-        start_if_none=True, quiet=not config.full,
+        start_if_none=True, quiet=not config.full, archive=config.archive,
     )  # fmt: skip
     stored = store.evaluations(int(result.run_id or 0))
     tables["steps"].extend(
@@ -689,6 +700,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_workers_option(parser, 2, "the GA's and the given designs' simulations")
     add_out_option(parser)
     add_store_option(parser)
+    parser.add_argument(
+        "--archive", type=Path, default=None, metavar="FOLDER",
+        help="a run archive: restore its runs into the store first, and write each run into it as it "
+        "finishes, with a snapshot every ten minutes while it runs (docs/problems.md, 'Experiments')",
+    )  # fmt: skip
 
 
 def cli(argv: list[str] | None = None) -> int:

@@ -114,15 +114,17 @@ def train_policy(
     speed_kmh: float | None = SPEED_KMH,
     speed_range: tuple[float, float] | None = None,
     quiet: bool = True,
+    archive: Path | None = None,
 ) -> tuple[DesignPolicy, OptimizationResult]:
-    """Train (or resume) a PPO design policy on ``Catenary-{problem}-v0`` in the store."""
+    """Train (or resume) a PPO design policy on ``Catenary-{problem}-v0`` in the store (and ``archive``,
+    :mod:`optimizers.archive`)."""
     from catenary_env.envs import register_envs
 
     check_starts_at_reference(problem)
     register_envs()
     return train_design_policy(
         policy_env(problem, fidelity, speed_kmh, speed_range), catenary_problem(problem), budget, seed,
-        options=options, store=store, resume=True, start_if_none=True, quiet=quiet,
+        options=options, store=store, resume=True, start_if_none=True, quiet=quiet, archive=archive,
     )  # fmt: skip
 
 

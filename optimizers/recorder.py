@@ -10,15 +10,29 @@ from __future__ import annotations
 import dataclasses
 import importlib.metadata
 import json
+import os
+import time
 from typing import Any
 
 from catenary_env.cli.progress import ProgressDisplay
 
+from .archive import archive_run, snapshot_run
 from .base import EvaluationRecord, OptimizationResult, best_record
 from .problem import GridSpace
 from .store import RunConfig, RunStore, StoredEvaluation, StoreError
 
-__all__ = ["RunRecorder", "finished_result", "open_run", "options_json", "package_version"]
+__all__ = [
+    "SNAPSHOT_EVERY_S",
+    "RunRecorder",
+    "finished_result",
+    "open_run",
+    "options_json",
+    "package_version",
+]
+
+SNAPSHOT_EVERY_S = 600.0
+"""Seconds between two snapshots of a run going on into its archive: a run interrupted with its store
+lost is resumed from at most this long before."""
 
 
 def package_version() -> str:
@@ -90,6 +104,10 @@ class RunRecorder:
         Refreshed as evaluations are appended.
     resumed : bool
         The run is resumed: say so, with the number of evaluations that will be replayed.
+    archive : path, optional
+        A run archive (:mod:`optimizers.archive`): the run is written into it when it finishes, and a
+        snapshot of it every :data:`SNAPSHOT_EVERY_S` seconds while it goes on (a long run survives the
+        loss of its store: a fresh checkout restores the snapshot and resumes from there).
     """
 
     def __init__(
@@ -101,8 +119,11 @@ class RunRecorder:
         source: str,
         progress: ProgressDisplay,
         resumed: bool = False,
+        archive: str | os.PathLike[str] | None = None,
     ) -> None:
         self.store = store
+        self.archive = archive
+        self._snapshot_at = time.monotonic()
         self.run_id = run_id
         self.config = config
         self.space = space
@@ -154,6 +175,9 @@ class RunRecorder:
         if record.loss != float("inf") and (self._best_sigma is None or record.loss < self._best_sigma):
             self._best_sigma = record.loss
         self._show(self.n_charged + self._charged_in_batch, len(self.history) + self._done_in_batch)
+        if self.archive is not None and time.monotonic() - self._snapshot_at >= SNAPSHOT_EVERY_S:
+            snapshot_run(self.store, self.run_id, self.archive)
+            self._snapshot_at = time.monotonic()
 
     def append(self, record: EvaluationRecord) -> None:
         """Add the next evaluation of the history."""
@@ -176,6 +200,8 @@ class RunRecorder:
     def result(self, stop_reason: str) -> OptimizationResult:
         """Mark the run finished in the store and return its result."""
         self.store.finish_run(self.run_id, stop_reason)
+        if self.archive is not None:
+            archive_run(self.store, self.run_id, self.archive)
         self._show(self.n_charged, len(self.history), force=True)
         self.progress.finish(f"stopped ({stop_reason})")
         return _result(self.config, self.space, self.run_id, self.history, stop_reason)

@@ -499,6 +499,7 @@ def train_design_policy(
     resume: bool = False,
     start_if_none: bool = True,
     quiet: bool = True,
+    archive: str | os.PathLike[str] | None = None,
 ) -> tuple[DesignPolicy, OptimizationResult]:
     """Train a design policy (PPO or SAC, as ``options`` say) for exactly ``budget`` env steps (simulations).
 
@@ -523,6 +524,9 @@ def train_design_policy(
         :class:`~optimizers.store.StoreError` lists the runs it holds).
     quiet : bool
         No progress display.
+    archive : path, optional
+        A run archive (:mod:`optimizers.archive`): the run goes into it when it finishes, and a snapshot of
+        it while it trains (:class:`~optimizers.recorder.RunRecorder`).
 
     Returns
     -------
@@ -547,7 +551,7 @@ def train_design_policy(
         )
         run_id, resumed = open_run(run_store, config, resume, start_if_none)
         progress = ProgressDisplay(f"{name} on {space.name}", int(budget), "simulations", quiet=quiet)
-        recorder = RunRecorder(run_store, run_id, config, space, "env", progress, resumed)
+        recorder = RunRecorder(run_store, run_id, config, space, "env", progress, resumed, archive)
         vec_env = _vector_env(env_spec, recorder, space, settings)
         stack.callback(vec_env.close)
         # One torch thread: these small networks gain nothing from more, and a fixed thread count keeps

@@ -62,6 +62,7 @@ def optimize(
     max_evaluations: int | None = None,
     quiet: bool = True,
     progress_interval: float = LOG_INTERVAL,
+    archive: str | os.PathLike[str] | None = None,
 ) -> OptimizationResult:
     """Run a registered optimiser on a problem and return its result.
 
@@ -98,6 +99,9 @@ def optimize(
         No progress display.
     progress_interval : float
         Seconds between two progress lines when stderr is not a terminal.
+    archive : path, optional
+        A run archive (:mod:`optimizers.archive`): the run goes into it when it finishes, and a snapshot of
+        it while it runs (:class:`~optimizers.recorder.RunRecorder`).
     """
     grid_problem = resolve_problem(problem)
     space = GridSpace.from_problem(grid_problem)
@@ -121,7 +125,7 @@ def optimize(
             quiet=quiet,
             interval=progress_interval,
         )
-        recorder = RunRecorder(run_store, run_id, config, space, "simulation", progress, resumed)
+        recorder = RunRecorder(run_store, run_id, config, space, "simulation", progress, resumed, archive)
         backend = stack.enter_context(make_backend(n_workers, scheduler))
         engine = spec.optimizer_class(space, int(budget), int(seed), settings)  # type: ignore[call-arg]
         loop = _BatchEvaluator(grid_problem, space, recorder, backend, cap)

@@ -153,3 +153,39 @@ def test_a_full_run_is_reproduced_by_the_catenary_optimize_command_beside_its_po
     expected = EnvSpec("Catenary-B1-v0", None, rl_amortised.SPEED_RANGE, "study", rl_amortised.HELD_OUT)
     assert rl_env_spec("B1", args) == expected
     assert dataclasses.replace(LEARNERS["sac"](), n_envs=args.workers) == config.learner_options("sac")
+
+
+def test_the_study_resumes_from_its_run_archive_on_a_fresh_checkout(tmp_path, monkeypatch):
+    """With ``archive``, each GA run and policy is archived as it finishes; another checkout (another out
+    folder, no store) restores them and writes the same steps, its policies replayed, not trained anew: it
+    simulates only the designs the study evaluates outside its runs (the policies' and GA's designs at
+    each speed)."""
+    archive = tmp_path / "archive"
+    simulate, calls = synthetic.simulate_quadratic, []
+    monkeypatch.setattr(
+        synthetic, "simulate_quadratic", lambda p, x, *a: calls.append(x) or simulate(p, x, *a)
+    )
+
+    def study(out: Path) -> Path:
+        config = rl_amortised.Config(
+            out=out, problems=("synthetic-speed-quadratic",), envs=1, workers=1, seeds=(0,), archive=archive
+        )
+        return rl_amortised.main(config)
+
+    first = study(tmp_path / "a")
+    made, calls[:] = len(calls), []
+    files = sorted(p.name.split("-seed")[0] for p in archive.glob("*/*.json.gz"))
+    config = rl_amortised.Config(problems=("synthetic-speed-quadratic",))
+    assert files == sorted(["ga"] * len(config.speeds) + list(config.learners))
+    second = study(tmp_path / "b")
+    runs = (
+        sum(r["n_simulations"] for r in read_csv(first / "ga_runs.csv"))
+        + len(config.learners) * config.policy_budget
+    )
+    assert len(calls) == made - runs
+    assert (second / "steps.csv").read_text(encoding="utf-8") == (first / "steps.csv").read_text(
+        encoding="utf-8"
+    )
+    assert (second / "ga_runs.csv").read_text(encoding="utf-8") == (first / "ga_runs.csv").read_text(
+        encoding="utf-8"
+    )

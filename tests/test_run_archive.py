@@ -220,3 +220,42 @@ def test_a_run_going_on_is_kept_as_a_snapshot_and_resumed_from_it(tmp_path, monk
     assert finished.is_file() and not snapshot.exists()
     with RunStore(tmp_path / "b" / "runs.sqlite") as store, pytest.raises(StoreError, match="has finished"):
         snapshot_run(store, store.find_run(config), archive)
+
+
+def test_a_run_killed_with_its_store_resumes_from_its_last_snapshot(tmp_path, monkeypatch):
+    """A run with an archive keeps a snapshot as it goes (here after every evaluation); killed, and its store
+    lost, it is restored from the snapshot into a new store and resumed to the same history as a run never
+    interrupted, simulating only what came after the snapshot."""
+    from optimizers import recorder
+    from optimizers.runner import optimize
+
+    monkeypatch.setattr(recorder, "SNAPSHOT_EVERY_S", 0.0)
+    whole = optimize(SYNTHETIC, "cma", 24, seed=3, fidelity="test")
+    simulate, calls = synthetic.simulate_quadratic, []
+
+    def killed_at_ten(problem, x, *args):
+        calls.append(x)
+        if len(calls) > 10:
+            raise KeyboardInterrupt
+        return simulate(problem, x, *args)
+
+    monkeypatch.setattr(synthetic, "simulate_quadratic", killed_at_ten)
+    archive = tmp_path / "archive"
+    with pytest.raises(KeyboardInterrupt):
+        optimize(
+            SYNTHETIC, "cma", 24, seed=3, fidelity="test", store=tmp_path / "lost.sqlite", archive=archive
+        )
+    (snapshot,) = archive.glob("*/*.partial.json.gz")
+
+    calls.clear()
+    monkeypatch.setattr(
+        synthetic, "simulate_quadratic", lambda p, x, *a: calls.append(x) or simulate(p, x, *a)
+    )
+    with RunStore(tmp_path / "new.sqlite") as store:
+        assert restore_runs(store, archive) == 1
+        resumed = optimize(
+            SYNTHETIC, "cma", 24, seed=3, fidelity="test", store=store, resume=True, archive=archive
+        )
+    assert [(r.x, r.sigma) for r in resumed.history] == [(r.x, r.sigma) for r in whole.history]
+    assert len(calls) == 24 - 10  # the ten in the snapshot were replayed
+    assert not snapshot.exists() and len(list(archive.glob("*/*.json.gz"))) == 1
