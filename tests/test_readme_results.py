@@ -74,7 +74,7 @@ def test_the_readme_counts_the_full_protocols_committed_runs():
     if first.startswith("Partial: "):
         assert first.startswith(f"Partial: {done} of ")
         total = first.split(" of ")[1].split(" runs")[0]
-        assert f"({done} of its {total} runs:" in readme
+        assert f"({done} of its {total} runs," in readme
     else:  # finished: the README no longer counts it as partial
         assert " of its 590 runs" not in readme
 
