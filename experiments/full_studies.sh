@@ -3,7 +3,7 @@ set -euo pipefail
 # The full studies of docs/problems.md, 'Experiments': the six design studies (B1 and SW1 first, the
 # headline), then the optimiser comparison (six problems) and the RL studies of B1 and SW1 in two lanes, each a single
 # process on one core (PPO steps its environment in one process), then both studies once more over both
-# problems, which replays every run from the store (nothing is simulated again) and writes their combined
+# problems, which takes every run from the store (nothing is simulated again) and writes their combined
 # results, and the report. A simulation of SW1 costs about 1.5 times one of B1 (and B1's comparison meets
 # more designs that fail the static check, which cost no dynamics), so the lanes split SW1's comparison by
 # optimiser: each lane finishes its share of the comparison, the headline, at about the same time, then

@@ -5,8 +5,9 @@ The published study's GA, nevergrad's CMA-ES, DE, PSO, random search and NGOpt, 
 process, and the PPO design policy (and any optimiser an installed package plugs in), at 300 km/h, each with
 the same budget of simulations and several seeds. Every run goes to one
 run store (the studies' shared ``runs.sqlite`` in the output folder, or ``Config.store``) and is resumed
-from it: a study run again, or interrupted and restarted, replays what is stored and simulates only what
-is missing, and a design simulated by one run is served to the others from the store's cache (it is still
+from it: a study run again, or interrupted and restarted, reads back the runs that finished (without
+replaying their optimiser), resumes the others (their stored evaluations replayed, only what is missing
+simulated), and a design simulated by one run is served to the others from the store's cache (it is still
 charged to each run's budget, so that a run's result does not depend on what else the store holds).
 
 Outputs (``results/optimizers/``):
@@ -277,20 +278,20 @@ def _prepare(config: Config, optimizer: str, problem: str, seed: int) -> _Prepar
 def _protocol_run(
     store: RunStore, config: Config, optimizer: str, problem: str, seed: int
 ) -> tuple[dict[str, Any], list[dict[str, Any]]]:
-    """The line of runs.csv of one run of the protocol and its evaluations' rows: made (or resumed), or
-    with ``from_store`` read from the store where it finished there, else a line "not run yet"."""
+    """The line of runs.csv of one run of the protocol and its evaluations' rows: read from the store where it
+    finished there (not replayed: a finished `gp` run would spend its model fits again), else made (or
+    resumed), or with ``from_store`` a line "not run yet"."""
     prepared = _prepare(config, optimizer, problem, seed)
     if prepared.identity is None:
         return _not_run_row(config, optimizer, problem, seed, prepared.note), []
     note = prepared.note
-    if config.from_store:
-        result, held, pending = _stored_run(store, prepared.identity, prepared.space)
-        if config.archive is not None and (result is not None or held):  # (made here: kept as it goes)
-            keep = archive_run if result is not None else snapshot_run  # a run going on: what it has so far
-            keep(store, int(store.find_run(prepared.identity)), config.archive)  # type: ignore[arg-type]
-        if result is None:
-            return _not_run_row(config, optimizer, problem, seed, pending, NOT_RUN_YET, held), []
-    else:
+    result, held, pending = _stored_run(store, prepared.identity, prepared.space)
+    if config.archive is not None and (result is not None or (held and config.from_store)):
+        keep = archive_run if result is not None else snapshot_run  # a run going on: what it has so far
+        keep(store, int(store.find_run(prepared.identity)), config.archive)  # type: ignore[arg-type]
+    if result is None and config.from_store:
+        return _not_run_row(config, optimizer, problem, seed, pending, NOT_RUN_YET, held), []
+    if result is None:
         result, note = _run(store, config, optimizer, problem, seed, note)
         if result is None:
             return _not_run_row(config, optimizer, problem, seed, note), []
