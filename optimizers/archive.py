@@ -141,9 +141,7 @@ def restore_runs(store: RunStore, folder: str | Path) -> int:
     restored = 0
     for path in sorted(finished) + snapshots:  # a run's file, else its snapshot
         run, rows = _read(path)
-        if store.find_run(_config(run)) is None:
-            store.add_run_rows(run, rows)
-            restored += 1
+        restored += store.add_run_rows(run, rows, if_absent=True) is not None
     return restored
 
 

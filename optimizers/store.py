@@ -375,30 +375,44 @@ class RunStore:
         ]
         return run, rows
 
-    def add_run_rows(self, run: dict[str, object], rows: list[dict[str, object]]) -> int:
+    def add_run_rows(
+        self, run: dict[str, object], rows: list[dict[str, object]], if_absent: bool = False
+    ) -> int | None:
         """Write a run and its evaluations as :meth:`run_rows` gives them (from this store or another), in
         one transaction; return its id here: its ``run_id`` where that is free here (a store restored into
-        a new file numbers its runs as the one it came from did), else a new one.
+        a new file numbers its runs as the one it came from did), else a new one. ``if_absent``: write
+        nothing and return None where the store holds a run of the same configuration (checked in the same
+        transaction, so that two processes restoring the same run into one store write it once).
 
         Raises
         ------
         StoreError
-            A column that is not the schema's (the rows come from a file).
+            A column that is not the schema's (the rows come from a file); with ``if_absent``, the store's
+            run of that configuration was made by another package version.
         """
         schema = _schema_columns()
-        unknown = set(run) - schema["runs"] | {c for row in rows for c in row} - (
-            schema["evaluations"] - {"run_id"}
-        )
+        evaluation_columns = schema["evaluations"] - {"run_id"}
+        unknown = set(run) - schema["runs"] | {c for row in rows for c in row} - evaluation_columns
         if unknown:
             raise StoreError(f"{self.path}: not columns of a run store to write: {sorted(unknown)}")
-        taken = (
-            "run_id" in run
-            and self._connection.execute("SELECT 1 FROM runs WHERE run_id = ?", (run["run_id"],)).fetchone()
-        )
-        with self._connection:
+        connection = self._connection
+        connection.execute("BEGIN IMMEDIATE")
+        try:
+            config = RunConfig(*(run[f] for f in RunConfig._fields)) if if_absent else None  # type: ignore[arg-type]
+            if config is not None and self.find_run(config) is not None:
+                connection.rollback()
+                return None
+            taken = (
+                "run_id" in run
+                and connection.execute("SELECT 1 FROM runs WHERE run_id = ?", (run["run_id"],)).fetchone()
+            )
             run_id = self._insert("runs", {k: v for k, v in run.items() if not (taken and k == "run_id")})
             for row in rows:
                 self._insert("evaluations", {"run_id": run_id, **row})
+            connection.commit()
+        except BaseException:
+            connection.rollback()
+            raise
         return run_id
 
     def _insert(self, table: str, row: dict[str, object]) -> int:

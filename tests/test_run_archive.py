@@ -259,3 +259,26 @@ def test_a_run_killed_with_its_store_resumes_from_its_last_snapshot(tmp_path, mo
     assert [(r.x, r.sigma) for r in resumed.history] == [(r.x, r.sigma) for r in whole.history]
     assert len(calls) == 24 - 10  # the ten in the snapshot were replayed
     assert not snapshot.exists() and len(list(archive.glob("*/*.json.gz"))) == 1
+
+
+def test_two_lanes_restoring_one_archive_into_one_store_write_each_run_once(tmp_path):
+    """The lanes of a protocol started together on a fresh checkout restore the same archive into the same
+    new store: each run is written once."""
+    _comparison(tmp_path / "a", archive=tmp_path / "archive")
+    path = tmp_path / "b.sqlite"
+    counts: list[int] = []
+    barrier = threading.Barrier(4)
+
+    def lane() -> None:
+        with RunStore(path) as store:
+            barrier.wait()
+            counts.append(restore_runs(store, tmp_path / "archive"))
+
+    threads = [threading.Thread(target=lane) for _ in range(4)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert sum(counts) == 4
+    with RunStore(path, read_only=True) as store:
+        assert len(store.runs()) == 4
