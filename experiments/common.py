@@ -134,6 +134,17 @@ def add_store_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_archive_option(parser: argparse.ArgumentParser, also: str = "") -> None:
+    """``--archive FOLDER``: the study's run archive (optimizers/archive.py); ``also``: what else the study
+    does with it."""
+    parser.add_argument(
+        "--archive", type=Path, default=None, metavar="FOLDER",
+        help="a run archive: restore its runs into the store first, and write each run into it as it "
+        "finishes, with a snapshot every ten minutes while it runs (one file a run, to commit as the study "
+        f"goes; docs/problems.md, 'Experiments'){also}",
+    )  # fmt: skip
+
+
 def config_from(config_class: Any, args: argparse.Namespace) -> Any:
     """The study's ``Config`` from its parsed options: each field from the option of its name (lists as
     tuples); a field without an option keeps its default."""

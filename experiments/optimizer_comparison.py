@@ -73,6 +73,7 @@ from . import benchmark_views as bv
 from .common import (
     DEFAULT_OUT,
     STORE,
+    add_archive_option,
     add_full_option,
     add_out_option,
     add_store_option,
@@ -809,12 +810,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "protocol that finished in the store (read only, so lanes may be running into it), and list every "
         "other run as 'not run yet' with the simulations the store holds of it",
     )  # fmt: skip
-    parser.add_argument(
-        "--archive", type=Path, default=None, metavar="FOLDER",
-        help="a run archive: restore its runs into the store first, and write every finished run of the "
-        "protocol into it (one file a run, committed as the protocol goes; docs/problems.md); with "
-        "--from-store, also a snapshot of each run still going",
-    )  # fmt: skip
+    add_archive_option(parser, "; with --from-store, also a snapshot of each run still going")
 
 
 def cli(argv: list[str] | None = None) -> int:

@@ -74,6 +74,7 @@ from optimizers.synthetic import SYNTHETIC_PROBLEMS
 from .common import (
     DEFAULT_OUT,
     STORE,
+    add_archive_option,
     add_full_option,
     add_out_option,
     add_store_option,
@@ -700,11 +701,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_workers_option(parser, 2, "the GA's and the given designs' simulations")
     add_out_option(parser)
     add_store_option(parser)
-    parser.add_argument(
-        "--archive", type=Path, default=None, metavar="FOLDER",
-        help="a run archive: restore its runs into the store first, and write each run into it as it "
-        "finishes, with a snapshot every ten minutes while it runs (docs/problems.md, 'Experiments')",
-    )  # fmt: skip
+    add_archive_option(parser)
 
 
 def cli(argv: list[str] | None = None) -> int:
