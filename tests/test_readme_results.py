@@ -65,18 +65,21 @@ def test_the_committed_comparison_is_the_full_one_on_b1_and_sw1():
             assert {(r["status"], r["fidelity"], r["budget"]) for r in chosen} == {("done", "study", "300")}
 
 
-def test_the_readme_counts_the_full_protocols_committed_runs():
-    """While the full protocol runs, the README's "N of its M runs" is what its committed export holds."""
+def test_the_readme_block_of_the_full_protocol_is_its_committed_results():
+    """The README's block on the full protocol is what ``python -m experiments.benchmark_summary`` writes from
+    the committed results: the count of finished runs, the fixed-budget table, the ECDF figure, the ranks
+    and what the best-known designs say of the design studies."""
+    from experiments.benchmark_summary import block
+
+    written = block(ROOT)
+    assert written in (ROOT / "README.md").read_text(encoding="utf-8")
     folder = ROOT / "results" / "full-protocol" / "optimizers"
-    first = (folder / "optimizers.md").read_text(encoding="utf-8").split("\n")[0]
-    readme = " ".join((ROOT / "README.md").read_text(encoding="utf-8").split())
     done = sum(r["status"] == "done" for r in _rows(folder / "runs.csv"))
-    if first.startswith("Partial: "):
-        assert first.startswith(f"Partial: {done} of ")
-        total = first.split(" of ")[1].split(" runs")[0]
-        assert f"({done} of its {total} runs," in readme
-    else:  # finished: the README no longer counts it as partial
-        assert " of its 590 runs" not in readme
+    assert (f"**Partial: {done} of " in written) == (done < 590)
+    assert "#### Fixed budget: best σ (N), median [IQR] of the runs" in written
+    assert "#### Ranks over" in written and "(results/full-protocol/optimizers/ecdf.png)" in written
+    for problem in ("B1", "B2", "B3", "SW1", "SW2", "SW3"):
+        assert f"\n- {problem}: " in written
 
 
 def _rl_tables() -> dict[str, str]:
