@@ -282,3 +282,21 @@ def test_two_lanes_restoring_one_archive_into_one_store_write_each_run_once(tmp_
     assert sum(counts) == 4
     with RunStore(path, read_only=True) as store:
         assert len(store.runs()) == 4
+
+
+def test_catenary_optimize_keeps_its_run_in_an_archive_and_resumes_it_elsewhere(
+    tmp_path, monkeypatch, capsys
+):
+    """``catenary optimize --archive``: the run goes into the archive; another machine (here a store in
+    memory) resumes it from there with --resume, replaying it without simulating."""
+    from catenary_env.cli import main
+
+    command = ["optimize", SYNTHETIC, "--optimizer", "cma", "--budget", "12", "--workers", "1", "--quiet"]
+    command += ["--json", "--archive", str(tmp_path / "archive")]
+    assert main([*command, "--store", str(tmp_path / "a.sqlite")]) == 0
+    made = json.loads(capsys.readouterr().out)
+    assert len(list((tmp_path / "archive").glob("*/*.json.gz"))) == 1
+    _refuse_simulations(monkeypatch)
+    assert main([*command, "--store", ":memory:", "--resume"]) == 0
+    resumed = json.loads(capsys.readouterr().out)
+    assert (resumed["best_sigma"], resumed["history"]) == (made["best_sigma"], made["history"])

@@ -1,7 +1,8 @@
 """``catenary optimize``: run an optimiser on a design problem from the command line.
 
     catenary optimize PROBLEM --optimizer NAME --budget N [--seed S] [--speed KMH] [--fidelity study|test]
-                      [--store PATH] [--resume] [--workers N] [--scheduler tcp://HOST:PORT] [--json]
+                      [--store PATH] [--resume] [--archive FOLDER] [--workers N]
+                      [--scheduler tcp://HOST:PORT] [--json]
                       [--speed-range LO HI] [--held-out-speeds A B [A B ...]] [--save-policy FILE]
 
 ``optimize`` is also available as ``python -m optimizers PROBLEM ...``. :func:`add_parser` adds the
@@ -17,10 +18,12 @@ where. Its ``--workers`` are the envs stepped at once, each in its process (defa
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import shlex
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -31,8 +34,10 @@ from catenary_env.cli.progress import LOG_INTERVAL
 from catenary_env.errors import MissingDependency, UsageError
 
 from .. import ga, nevergrad_adapters  # noqa: F401  (register the built-in optimisers)
+from ..archive import restore_runs
 from ..base import OPTIMIZERS, OptimizationResult
 from ..plugins import get_optimizer, load_plugins
+from ..store import RunStore
 
 __all__ = ["DEFAULT_STORE", "DESCRIPTION", "add_arguments", "add_parser", "run"]
 
@@ -137,6 +142,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="like --resume, but start the run when the store holds none (for a command re-run until done)",
     )
     parser.add_argument(
+        "--archive",
+        type=Path,
+        default=None,
+        metavar="FOLDER",
+        help="a run archive (one file a run, to commit or copy away): the runs it holds and the store "
+        "lacks are restored into the store first, so --resume continues a run made elsewhere; the run goes "
+        "into it when it finishes, with a snapshot every ten minutes while it runs",
+    )
+    parser.add_argument(
         "--workers",
         type=int,
         default=None,
@@ -200,10 +214,11 @@ def run(args: argparse.Namespace) -> int:
             raise UsageError(f"--save-policy is for --optimizer ppo or sac, not {args.optimizer}")
         check_output_path(args.save_policy, "--save-policy")
     try:
-        if args.optimizer in RL_OPTIMIZERS:
-            result, policy_path = _run_rl(args)
-        else:
-            result, policy_path = _run_optimizer(args), None
+        with _store(args) as store:
+            if args.optimizer in RL_OPTIMIZERS:
+                result, policy_path = _run_rl(args, store)
+            else:
+                result, policy_path = _run_optimizer(args, store), None
     except KeyboardInterrupt as error:
         how, status = interruption(error)
         print(
@@ -231,7 +246,20 @@ RESULT_UNITS = {
 """Units of the numbers in ``catenary optimize --json``."""
 
 
-def _run_optimizer(args: argparse.Namespace) -> OptimizationResult:
+@contextlib.contextmanager
+def _store(args: argparse.Namespace) -> Iterator[RunStore | str]:
+    """The run store the run goes to: with ``--archive``, opened here, the archive's runs restored into it."""
+    if args.archive is None:
+        yield args.store
+        return
+    with RunStore(args.store) as store:
+        restored = restore_runs(store, args.archive)
+        if restored and not args.quiet:
+            print(f"{restored} run(s) restored from {args.archive} into {args.store}", file=sys.stderr)
+        yield store
+
+
+def _run_optimizer(args: argparse.Namespace, store: RunStore | str) -> OptimizationResult:
     from ..runner import optimize
 
     if args.speed_range is not None:
@@ -246,9 +274,9 @@ def _run_optimizer(args: argparse.Namespace) -> OptimizationResult:
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     return optimize(
         _problem(args), args.optimizer, args.budget, args.seed, speed_kmh=args.speed, fidelity=args.fidelity,
-        store=args.store, resume=args.resume or args.resume_or_start, start_if_none=args.resume_or_start,
-        n_workers=workers, scheduler=args.scheduler,
-        max_evaluations=args.max_evaluations, quiet=args.quiet, progress_interval=args.progress_every,
+        store=store, resume=args.resume or args.resume_or_start, start_if_none=args.resume_or_start,
+        n_workers=workers, scheduler=args.scheduler, max_evaluations=args.max_evaluations, quiet=args.quiet,
+        progress_interval=args.progress_every, archive=args.archive,
     )  # fmt: skip
 
 
@@ -273,7 +301,7 @@ def _problem(args: argparse.Namespace) -> Any:
     return catenary_problem(args.problem, train)
 
 
-def _run_rl(args: argparse.Namespace) -> tuple[OptimizationResult, Path | None]:
+def _run_rl(args: argparse.Namespace, store: RunStore | str) -> tuple[OptimizationResult, Path | None]:
     import dataclasses
 
     from ..catenary_adapter import catenary_problem
@@ -297,8 +325,9 @@ def _run_rl(args: argparse.Namespace) -> tuple[OptimizationResult, Path | None]:
         )
     options = dataclasses.replace(LEARNERS[args.optimizer](), n_envs=n_envs)
     policy, result = train_design_policy(
-        spec, problem, args.budget, args.seed, options=options, store=args.store,
+        spec, problem, args.budget, args.seed, options=options, store=store,
         resume=args.resume or args.resume_or_start, start_if_none=args.resume_or_start, quiet=args.quiet,
+        archive=args.archive,
     )  # fmt: skip
     path = args.save_policy
     if path is None and args.store != ":memory:":
