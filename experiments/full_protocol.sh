@@ -7,10 +7,10 @@ set -euo pipefail
 # OUT/full-protocol/archive (with a snapshot every ten minutes while it runs): commit the archive as the lanes
 # go. Started again, here or on a fresh checkout, each lane restores the archive into the store, reads back the
 # runs that finished and resumes the others, so the script can be killed and started again at any time.
-# The lanes split the work by the hour: lane 1 the Gaussian-process runs of B1-B3 (some 15 min each: their
-# model fits), then those of SW1 and SW1's PPO runs; lane 2 the other seven optimisers on SW1-SW3 (some 3 min
-# a run), then the Gaussian-process runs of SW2 and SW3. The other optimisers' B1-B3 runs come first in lane 1
-# where they are not finished yet. The lanes' own tables go to OUT/lanes (scratch, not committed).
+# The lanes split the work by the hour (docs/performance.md): lane 1 the runs of B1-B3 (a Gaussian-process run
+# some 8 min, most of it its model fits), then the Gaussian-process runs of SW1-SW3; lane 2 the other seven
+# optimisers on SW1-SW3 (some 3.5 min a run), then SW1's PPO runs. The lanes' own tables go to OUT/lanes
+# (scratch, not committed).
 # While the lanes run, `python -m experiments.optimizer_comparison --full --from-store --store
 # OUT/runs.sqlite --archive OUT/full-protocol/archive --out OUT/full-protocol` writes the results so far and
 # a snapshot of each run in flight, simulating nothing.
@@ -25,12 +25,12 @@ comparison() {  # comparison RESULTS ARGS...
 }
 {
     comparison "$OUT/lanes/1" --problems B1 B2 B3
-    comparison "$OUT/lanes/1" --problems SW1 --optimizers gp ppo
+    comparison "$OUT/lanes/1" --problems SW1 SW2 SW3 --optimizers gp
 } > "$OUT/lane-1.log" 2>&1 &
 one=$!
 {
     comparison "$OUT/lanes/2" --problems SW1 SW2 SW3 --optimizers ga cma de pso random ngopt tpe
-    comparison "$OUT/lanes/2" --problems SW2 SW3 --optimizers gp
+    comparison "$OUT/lanes/2" --problems SW1 --optimizers ppo
 } > "$OUT/lane-2.log" 2>&1 &
 two=$!
 status=0
