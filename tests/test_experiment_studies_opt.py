@@ -405,3 +405,27 @@ def test_a_problem_without_a_reference_design_has_no_reference_row(tmp_path, mon
         optimizer_comparison.Config(out=tmp_path, problems=("B3",), optimizers=())
     )
     assert read_csv(folder / "reference.csv") == []
+
+
+def test_the_lanes_of_the_full_protocol_share_no_run_and_make_them_all():
+    """experiments/full_protocol.sh: two lanes never make the same run at once (they would write it twice),
+    and between them they make every run of the protocol."""
+    script = (Path(__file__).resolve().parents[1] / "experiments" / "full_protocol.sh").read_text(
+        encoding="utf-8"
+    )
+    lanes: dict[str, set[tuple[str, str]]] = {}
+    for line in script.splitlines():
+        words = line.split()
+        if words[:1] != ["comparison"] or "--problems" not in words:
+            continue
+        lane = words[1]
+        options = " ".join(words[2:]).split("--")[1:]
+        given = {o.split()[0]: o.split()[1:] for o in options}
+        optimizers = given.get("optimizers", list(optimizer_comparison.OPTIMIZERS))
+        lanes.setdefault(lane, set()).update((p, o) for p in given["problems"] for o in optimizers)
+    assert len(lanes) == 2
+    first, second = lanes.values()
+    assert not first & second
+    made = first | second  # PPO only where its start is the reference design (B1 and SW1)
+    protocol = {(p, o) for p in optimizer_comparison.FULL_PROBLEMS for o in optimizer_comparison.OPTIMIZERS}
+    assert {r for r in protocol if r[1] != "ppo"} | {("B1", "ppo"), ("SW1", "ppo")} <= made
