@@ -206,6 +206,29 @@ def common_blocks(finals: dict[str, dict[tuple[str, int], float]]) -> list[tuple
     return sorted(set.intersection(*(set(by_block) for by_block in finals.values()))) if finals else []
 
 
+def broadest(
+    finals: dict[str, dict[tuple[str, int], float]],
+) -> tuple[dict[str, dict[tuple[str, int], float]], dict[str, int]]:
+    """The optimisers to rank together over many blocks while runs are missing: in order of their finished
+    blocks (most first), each joins unless it would leave fewer than half the blocks those before it share.
+    Returns them, and those left out with their finished blocks.
+
+    >>> a = {("B1", s): 1.0 for s in range(10)} | {("B2", s): 1.0 for s in range(10)}
+    >>> kept, left = broadest({"a": a, "b": dict(a), "c": {("B1", 0): 2.0}})
+    >>> sorted(kept), left
+    (['a', 'b'], {'c': 1})
+    """
+    kept: dict[str, dict[tuple[str, int], float]] = {}
+    left: dict[str, int] = {}
+    for name in sorted(finals, key=lambda n: (-len(finals[n]), n)):
+        joined = {**kept, name: finals[name]}
+        if len(kept) < 2 or 2 * len(common_blocks(joined)) >= len(common_blocks(kept)):
+            kept = joined
+        else:
+            left[name] = len(finals[name])
+    return kept, left
+
+
 def ecdf_figure(
     curves: dict[str, np.ndarray],
     problems: Sequence[str],

@@ -677,6 +677,11 @@ def views(
         # PPO runs on B1 and SW1 only: with it, the blocks are theirs; without it, every problem's.
         narrow = sorted({r["optimizer"] for r in runs if r["status"] == NOT_RUN} & set(finals))
         everywhere = {o: by_block for o, by_block in finals.items() if o not in narrow}
+        if partial:  # the broad view: an optimiser with runs on few problems yet would narrow it to those
+            everywhere, behind = bv.broadest(everywhere)
+            if behind:
+                left_out = ", ".join(f"{o} ({n} finished)" for o, n in sorted(behind.items()))
+                suffix += f"; left out until more of their runs have finished: {left_out}"
         if narrow and len(everywhere) >= 3:
             without = f", without {', '.join(narrow)} (not run on every problem)"
             parts.append(_rank_section(folder / "ranks_every_problem.csv", everywhere, without + suffix))

@@ -234,3 +234,22 @@ def test_the_comparison_takes_any_registered_optimizer_with_its_own_options(caps
     with pytest.raises(SystemExit):
         parser.parse_args(["--optimizers", "nosuch"])
     assert "unknown optimizer 'nosuch'" in capsys.readouterr().err
+
+
+def test_the_broad_ranks_leave_out_an_optimiser_that_would_narrow_them_to_a_few_blocks():
+    """While runs are missing, an optimiser finished on one problem only would cut the ranks over every
+    problem to that problem's blocks: it waits, named, and the others are ranked over all theirs."""
+    from experiments.benchmark_views import broadest, common_blocks
+
+    everywhere = {(p, s): 1.0 for p in ("B1", "B2", "B3") for s in range(10)}
+    finals = {
+        "ga": everywhere,
+        "cma": dict(everywhere),
+        "tpe": {k: v for k, v in everywhere.items() if k[0] != "B3"},
+    }
+    finals["gp"] = {("B1", s): 1.0 for s in range(5)}  # 5 blocks: fewer than half the others' 20
+    kept, left = broadest(finals)
+    assert sorted(kept) == ["cma", "ga", "tpe"] and left == {"gp": 5}
+    assert len(common_blocks(kept)) == 20  # B1 and B2: TPE's 20 of 30 is more than half
+    kept, left = broadest({"ga": everywhere, "cma": dict(everywhere), "gp": dict(everywhere)})
+    assert sorted(kept) == ["cma", "ga", "gp"] and left == {}  # every run there: nobody waits
