@@ -47,6 +47,7 @@ line "not run yet" of ``runs.csv`` with the simulations the store holds of it, a
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from collections import Counter
 from dataclasses import dataclass
@@ -109,6 +110,8 @@ DONE, NOT_RUN, NOT_RUN_YET = "done", "not run", "not run yet"
 """The status of a run in ``runs.csv``: finished; cannot run here (the note says why); not finished in the
 store when the results were written from it (``--from-store``: the note and ``n_simulations`` say what the
 store holds of it)."""
+ANOTHER_PROCESS = "being made by another process (another lane of the study)"
+"""The note of a run that another process holds (:meth:`~optimizers.store.RunStore.claim`)."""
 
 
 @dataclass(frozen=True)
@@ -281,21 +284,26 @@ def _protocol_run(
 ) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     """The line of runs.csv of one run of the protocol and its evaluations' rows: read from the store where it
     finished there (not replayed: a finished `gp` run would spend its model fits again), else made (or
-    resumed), or with ``from_store`` a line "not run yet"."""
+    resumed), or with ``from_store`` a line "not run yet". A run that another process is making (another
+    lane: :meth:`~optimizers.store.RunStore.claim`) is a line "not run yet" and left to it."""
     prepared = _prepare(config, optimizer, problem, seed)
     if prepared.identity is None:
         return _not_run_row(config, optimizer, problem, seed, prepared.note), []
-    note = prepared.note
-    result, held, pending = _stored_run(store, prepared.identity, prepared.space)
-    if config.archive is not None and (result is not None or (held and config.from_store)):
-        keep = archive_run if result is not None else snapshot_run  # a run going on: what it has so far
-        keep(store, int(store.find_run(prepared.identity)), config.archive)  # type: ignore[arg-type]
-    if result is None and config.from_store:
-        return _not_run_row(config, optimizer, problem, seed, pending, NOT_RUN_YET, held), []
-    if result is None:
-        result, note = _run(store, config, optimizer, problem, seed, note)
+    claim = contextlib.nullcontext(True) if config.from_store else store.claim(prepared.identity)
+    with claim as mine:  # --from-store only reads
+        if not mine:
+            return _not_run_row(config, optimizer, problem, seed, ANOTHER_PROCESS, NOT_RUN_YET), []
+        note = prepared.note
+        result, held, pending = _stored_run(store, prepared.identity, prepared.space)
+        if config.archive is not None and (result is not None or (held and config.from_store)):
+            keep = archive_run if result is not None else snapshot_run  # a run going on: what it has so far
+            keep(store, int(store.find_run(prepared.identity)), config.archive)  # type: ignore[arg-type]
+        if result is None and config.from_store:
+            return _not_run_row(config, optimizer, problem, seed, pending, NOT_RUN_YET, held), []
         if result is None:
-            return _not_run_row(config, optimizer, problem, seed, note), []
+            result, note = _run(store, config, optimizer, problem, seed, note)
+            if result is None:
+                return _not_run_row(config, optimizer, problem, seed, note), []
     rows = _evaluation_rows(store, result, problem)
     return _run_row(config, result, problem, rows, note), rows
 

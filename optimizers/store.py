@@ -32,11 +32,14 @@ True
 
 from __future__ import annotations
 
+import contextlib
 import datetime
 import functools
+import hashlib
 import json
 import os
 import sqlite3
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -336,6 +339,39 @@ class RunStore:
                 "or start the run in a new store"
             )
         return int(row[0])
+
+    @contextlib.contextmanager
+    def claim(self, config: RunConfig) -> Iterator[bool]:
+        """Hold the run of ``config`` for this process while the block runs: yields True, or False when
+        another process holds it (it is making that run now).
+
+        The processes that share a study's runs (its lanes) each make only the runs they hold, so no run is
+        made twice at once and a lane that has run out of its own runs can take the others' that nobody has
+        started. The claim is a lock on a file in the folder ``<store>.claims`` beside the store, which the
+        operating system releases when the process ends, however it ends. An in-memory store, or a system
+        without ``fcntl`` (Windows), always holds it.
+        """
+        try:
+            import fcntl
+        except ImportError:
+            yield True
+            return
+        if self.path == ":memory:":
+            yield True
+            return
+        folder = Path(self.path + ".claims")
+        folder.mkdir(exist_ok=True)
+        key = hashlib.sha256(json.dumps(list(config[:7])).encode()).hexdigest()[:16]
+        with open(folder / f"{key}.lock", "a") as handle:
+            try:
+                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                yield False
+                return
+            try:
+                yield True
+            finally:
+                fcntl.flock(handle, fcntl.LOCK_UN)
 
     def finish_run(self, run_id: int, stop_reason: str) -> None:
         """Record that a run ended, and why."""

@@ -407,25 +407,44 @@ def test_a_problem_without_a_reference_design_has_no_reference_row(tmp_path, mon
     assert read_csv(folder / "reference.csv") == []
 
 
-def test_the_lanes_of_the_full_protocol_share_no_run_and_make_them_all():
-    """experiments/full_protocol.sh: two lanes never make the same run at once (they would write it twice),
-    and between them they make every run of the protocol."""
+def test_the_lanes_of_the_full_protocol_make_every_run_and_both_end_on_the_whole_protocol():
+    """experiments/full_protocol.sh: between them the lanes' own parts make every run of the protocol, and
+    each lane ends on the whole protocol, so that a lane done with its part takes the runs of the other's
+    that nobody has started (a run the other lane is making is left to it: next test) instead of idling."""
     script = (Path(__file__).resolve().parents[1] / "experiments" / "full_protocol.sh").read_text(
         encoding="utf-8"
     )
-    lanes: dict[str, set[tuple[str, str]]] = {}
+    lanes: dict[str, list[set[tuple[str, str]]]] = {}
     for line in script.splitlines():
-        words = line.split()
-        if words[:1] != ["comparison"] or "--problems" not in words:
+        words = line.split("#")[0].split()
+        if words[:1] != ["comparison"] or not words[1].startswith('"$OUT/lanes/'):
             continue
-        lane = words[1]
         options = " ".join(words[2:]).split("--")[1:]
         given = {o.split()[0]: o.split()[1:] for o in options}
+        problems = given.get("problems", list(optimizer_comparison.FULL_PROBLEMS))
         optimizers = given.get("optimizers", list(optimizer_comparison.OPTIMIZERS))
-        lanes.setdefault(lane, set()).update((p, o) for p in given["problems"] for o in optimizers)
-    assert len(lanes) == 2
-    first, second = lanes.values()
-    assert not first & second
-    made = first | second  # PPO only where its start is the reference design (B1 and SW1)
+        lanes.setdefault(words[1], []).append({(p, o) for p in problems for o in optimizers})
     protocol = {(p, o) for p in optimizer_comparison.FULL_PROBLEMS for o in optimizer_comparison.OPTIMIZERS}
+    assert len(lanes) == 2
+    made = set().union(*(stage for stages in lanes.values() for stage in stages[:-1]))
+    # PPO only where its start is the reference design (B1 and SW1)
     assert {r for r in protocol if r[1] != "ppo"} | {("B1", "ppo"), ("SW1", "ppo")} <= made
+    assert all(stages[-1] == protocol for stages in lanes.values())
+
+
+def test_a_run_another_process_is_making_is_left_to_it(tmp_path, monkeypatch):
+    """Two lanes sharing one store: a run that one holds (:meth:`RunStore.claim`) is a line "not run yet"
+    in the other's table, neither made nor read there; once released, the other makes it."""
+    comparison = optimizer_comparison
+    config = comparison.Config(out=tmp_path, problems=(SYNTHETIC,), optimizers=("random",))
+    identity = comparison._prepare(config, "random", SYNTHETIC, 0).identity
+    with RunStore(tmp_path / "runs.sqlite") as lane_1, RunStore(tmp_path / "runs.sqlite") as lane_2:
+        with lane_1.claim(identity) as held:
+            assert held
+            with lane_2.claim(identity) as also:
+                assert not also
+            row, rows = optimizer_comparison._protocol_run(lane_2, config, "random", SYNTHETIC, 0)
+            assert (row["status"], row["note"], rows) == ("not run yet", comparison.ANOTHER_PROCESS, [])
+            assert lane_2.find_run(identity) is None
+        row, rows = optimizer_comparison._protocol_run(lane_2, config, "random", SYNTHETIC, 0)
+        assert row["status"] == "done" and len(rows) == config.budget
