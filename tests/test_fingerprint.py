@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import json
+import subprocess
 from pathlib import Path
 
 from catenary_env import fingerprint, pipeline
@@ -96,10 +97,19 @@ def test_the_fidelity_contract_was_measured_on_the_current_model(monkeypatch):
         )
 
 
+def _committed(folder):
+    """Whether git tracks a file in ``folder`` (True outside a git checkout): the working tree also holds
+    folders that are not results (the run store's claims, results/runs.sqlite.claims)."""
+    if not (ROOT / ".git").exists():
+        return True
+    listed = subprocess.run(["git", "ls-files", "--", str(folder)], cwd=ROOT, capture_output=True, text=True)
+    return listed.returncode != 0 or bool(listed.stdout.strip())
+
+
 def _study_folders(root):
     """The folders of committed studies: each folder of ``root``, or, for one that holds only folders (the
     results of a study run elsewhere, e.g. results/full-protocol/optimizers), each of those."""
-    for folder in sorted(p for p in root.iterdir() if p.is_dir()):
+    for folder in sorted(p for p in root.iterdir() if p.is_dir() and _committed(p)):
         if any(p.is_file() for p in folder.iterdir()):
             yield folder
         else:
