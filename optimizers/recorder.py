@@ -7,11 +7,13 @@ each new evaluation to the store as it completes, and append the evaluations to 
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import importlib.metadata
 import json
 import os
 import time
+from collections.abc import Iterator
 from typing import Any
 
 from catenary_env.cli.progress import ProgressDisplay
@@ -48,30 +50,46 @@ def options_json(options: Any) -> str:
     return json.dumps(dataclasses.asdict(options), sort_keys=True)
 
 
+@contextlib.contextmanager
 def open_run(
     store: RunStore, config: RunConfig, resume: bool, start_if_none: bool = True
-) -> tuple[int, bool]:
-    """The run to write into and whether it is resumed.
+) -> Iterator[tuple[int, bool]]:
+    """The run to write into and whether it is resumed, held by this process while the block runs
+    (:meth:`RunStore.claim <optimizers.store.RunStore.claim>`).
 
     With ``resume``: the latest stored run of this configuration; when there is none, a new run if
-    ``start_if_none``, else :class:`StoreError` listing the runs the store holds. Without: a new run.
+    ``start_if_none``, else :class:`StoreError` listing the runs the store holds; :class:`StoreError` too when
+    another process is making that run now (two processes writing one run would interleave their
+    evaluations). Without: a new run.
     """
-    if resume:
-        run_id = store.find_run(config)
-        if run_id is not None:
-            return run_id, True
-        if not start_if_none:
-            raise StoreError(f"{store.path}: {_no_run_to_resume(store, config)}")
-    return store.start_run(config), False
+    with store.claim(config) as held:
+        if resume and not held:
+            raise StoreError(
+                f"{store.path}: {_asked(config)} is being made by another process now; wait for it to end "
+                "(then resume it), or give another seed or store"
+            )
+        if resume:
+            run_id = store.find_run(config)
+            if run_id is not None:
+                yield run_id, True
+                return
+            if not start_if_none:
+                raise StoreError(f"{store.path}: {_no_run_to_resume(store, config)}")
+        yield store.start_run(config), False
+
+
+def _asked(config: RunConfig) -> str:
+    """The run a configuration names, in words."""
+    speed = "a speed range" if config.speed_kmh is None else f"speed {config.speed_kmh:g} km/h"
+    return (
+        f"{config.optimizer} on {config.problem}, budget {config.budget}, seed {config.seed}, {speed}, "
+        f"fidelity {config.fidelity}"
+    )
 
 
 def _no_run_to_resume(store: RunStore, config: RunConfig) -> str:
     """Why nothing matches --resume: the configuration asked and the runs the store holds."""
-    speed = "a speed range" if config.speed_kmh is None else f"speed {config.speed_kmh:g} km/h"
-    asked = (
-        f"{config.optimizer} on {config.problem}, budget {config.budget}, seed {config.seed}, {speed}, "
-        f"fidelity {config.fidelity}"
-    )
+    asked = _asked(config)
     runs = store.runs()
     found = "; ".join(
         f"run {r['run_id']}: {r['optimizer']} on {r['problem']}, budget {r['budget']}, seed {r['seed']}, "

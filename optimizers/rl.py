@@ -549,7 +549,7 @@ def train_design_policy(
         run_store = (
             store if isinstance(store, RunStore) else stack.enter_context(RunStore(store or ":memory:"))
         )
-        run_id, resumed = open_run(run_store, config, resume, start_if_none)
+        run_id, resumed = stack.enter_context(open_run(run_store, config, resume, start_if_none))
         progress = ProgressDisplay(f"{name} on {space.name}", int(budget), "simulations", quiet=quiet)
         recorder = RunRecorder(run_store, run_id, config, space, "env", progress, resumed, archive)
         vec_env = _vector_env(env_spec, recorder, space, settings)

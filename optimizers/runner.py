@@ -117,7 +117,7 @@ def optimize(
         run_store = (
             store if isinstance(store, RunStore) else stack.enter_context(RunStore(store or ":memory:"))
         )
-        run_id, resumed = open_run(run_store, config, resume, start_if_none)
+        run_id, resumed = stack.enter_context(open_run(run_store, config, resume, start_if_none))
         progress = ProgressDisplay(
             f"{optimizer} on {space.name}",
             int(budget),

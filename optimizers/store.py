@@ -60,6 +60,10 @@ __all__ = [
     "StoredEvaluation",
 ]
 
+_CLAIMED: set[str] = set()
+"""The claims' lock files this process holds (:meth:`RunStore.claim`): a second open file would not get the
+lock the first holds, in the same process too."""
+
 APPLICATION_ID = 0x43415445
 """SQLite ``application_id`` of a run store: the bytes ``CATE``."""
 
@@ -362,15 +366,21 @@ class RunStore:
         folder = Path(self.path + ".claims")
         folder.mkdir(exist_ok=True)
         key = hashlib.sha256(json.dumps(list(config[:7])).encode()).hexdigest()[:16]
-        with open(folder / f"{key}.lock", "a") as handle:
+        lock = str((folder / f"{key}.lock").resolve())
+        if lock in _CLAIMED:  # held already by this process (the comparison holds a run, then makes it)
+            yield True
+            return
+        with open(lock, "a") as handle:
             try:
                 fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
                 yield False
                 return
+            _CLAIMED.add(lock)
             try:
                 yield True
             finally:
+                _CLAIMED.discard(lock)
                 fcntl.flock(handle, fcntl.LOCK_UN)
 
     def finish_run(self, run_id: int, stop_reason: str) -> None:

@@ -6,8 +6,12 @@ that ``pip install -e . pytest`` runs the core.
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
+import json
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -90,3 +94,35 @@ def assert_recorded(
     assert trajectory.slack_steps == int(recorded[f"{case}/slack_steps"]), case
     if sigma is not None:
         assert sigma == pytest.approx(float(recorded[f"{case}/sigma"]), rel=0.0, abs=RECORDED_TOLERANCE), case
+
+
+_HOLDER = """
+import json, sys
+from optimizers.store import RunConfig, RunStore
+with RunStore(sys.argv[1]) as store, store.claim(RunConfig(*json.loads(sys.argv[2]))) as held:
+    print(held, flush=True)
+    sys.stdin.read()
+"""
+
+
+@pytest.fixture
+def claimed_elsewhere():
+    """``claimed_elsewhere(store_path, config)``: a context in which another process holds the run of
+    ``config`` in the store (:meth:`optimizers.store.RunStore.claim`), released on leaving it."""
+
+    @contextlib.contextmanager
+    def hold(store_path, config):
+        holder = subprocess.Popen(
+            [sys.executable, "-c", _HOLDER, str(store_path), json.dumps(list(config))],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+            cwd=Path(__file__).resolve().parents[1],
+        )
+        try:
+            assert holder.stdout.readline().strip() == "True"
+            yield
+        finally:
+            holder.communicate("")
+
+    return hold

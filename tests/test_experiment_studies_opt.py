@@ -432,19 +432,18 @@ def test_the_lanes_of_the_full_protocol_make_every_run_and_both_end_on_the_whole
     assert all(stages[-1] == protocol for stages in lanes.values())
 
 
-def test_a_run_another_process_is_making_is_left_to_it(tmp_path, monkeypatch):
-    """Two lanes sharing one store: a run that one holds (:meth:`RunStore.claim`) is a line "not run yet"
-    in the other's table, neither made nor read there; once released, the other makes it."""
+def test_a_run_another_process_is_making_is_left_to_it(tmp_path, claimed_elsewhere):
+    """Two lanes sharing one store: a run that another process holds (:meth:`RunStore.claim`) is a line "not
+    run yet" in this one's table, neither made nor read here; once released, this one makes it."""
     comparison = optimizer_comparison
     config = comparison.Config(out=tmp_path, problems=(SYNTHETIC,), optimizers=("random",))
     identity = comparison._prepare(config, "random", SYNTHETIC, 0).identity
-    with RunStore(tmp_path / "runs.sqlite") as lane_1, RunStore(tmp_path / "runs.sqlite") as lane_2:
-        with lane_1.claim(identity) as held:
-            assert held
-            with lane_2.claim(identity) as also:
-                assert not also
-            row, rows = optimizer_comparison._protocol_run(lane_2, config, "random", SYNTHETIC, 0)
+    with RunStore(tmp_path / "runs.sqlite") as store:
+        with claimed_elsewhere(store.path, identity):
+            with store.claim(identity) as held:
+                assert not held
+            row, rows = comparison._protocol_run(store, config, "random", SYNTHETIC, 0)
             assert (row["status"], row["note"], rows) == ("not run yet", comparison.ANOTHER_PROCESS, [])
-            assert lane_2.find_run(identity) is None
-        row, rows = optimizer_comparison._protocol_run(lane_2, config, "random", SYNTHETIC, 0)
+            assert store.find_run(identity) is None
+        row, rows = comparison._protocol_run(store, config, "random", SYNTHETIC, 0)  # held, then made, here
         assert row["status"] == "done" and len(rows) == config.budget

@@ -213,3 +213,26 @@ def test_a_finished_run_reads_back_as_its_resumption_returns_it(tmp_path):
         connection.execute("UPDATE runs SET stop_reason = NULL WHERE run_id = ?", (made.run_id,))
     with RunStore(store, read_only=True) as opened, pytest.raises(StoreError, match="has not finished"):
         finished_result(opened, made.run_id, config, space)
+
+
+def test_a_run_another_process_is_making_is_not_resumed_here(tmp_path, claimed_elsewhere):
+    """Two processes resuming one run would interleave their evaluations in it: while another process holds
+    the run (a second terminal, a lane), ``--resume`` is refused with a message that says so; a new run
+    (without ``--resume``) is another run and goes ahead."""
+    from optimizers.plugins import get_optimizer
+    from optimizers.problem import GridSpace
+    from optimizers.problem_registry import resolve_problem
+    from optimizers.runner import run_config
+    from optimizers.store import StoreError
+
+    store = tmp_path / "runs.sqlite"
+    problem = "synthetic-quadratic"
+    space = GridSpace.from_problem(resolve_problem(problem))
+    config = run_config("cma", space, 20, 2, 300.0, "test", get_optimizer("cma").options_class())
+    first = optimize(problem, "cma", 20, 2, fidelity="test", store=store)
+    with claimed_elsewhere(store, config):
+        with pytest.raises(StoreError, match="being made by another process now; wait for it to end"):
+            optimize(problem, "cma", 20, 2, fidelity="test", store=store, resume=True)
+        assert optimize(problem, "cma", 20, 2, fidelity="test", store=store).run_id == first.run_id + 1
+    resumed = optimize(problem, "cma", 20, 2, fidelity="test", store=store, resume=True)
+    assert resumed.run_id == first.run_id + 1  # released: the latest run of the configuration

@@ -134,7 +134,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="continue the latest run in the store with the same problem, optimiser, budget, seed, "
         "speed and fidelity: its stored evaluations are replayed, not simulated; refused, listing the "
-        "store's runs, when it holds none",
+        "store's runs, when it holds none, and while another process is making that run",
     )
     parser.add_argument(
         "--resume-or-start",
