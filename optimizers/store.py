@@ -355,21 +355,13 @@ class RunStore:
         operating system releases when the process ends, however it ends. An in-memory store, or a system
         without ``fcntl`` (Windows), always holds it.
         """
-        try:
-            import fcntl
-        except ImportError:
-            yield True
+        lock = self._claim_file(config)
+        if lock is None or lock in _CLAIMED:  # held already by this process: the comparison holds a run,
+            yield True  # then makes it
             return
-        if self.path == ":memory:":
-            yield True
-            return
-        folder = Path(self.path + ".claims")
-        folder.mkdir(exist_ok=True)
-        key = hashlib.sha256(json.dumps(list(config[:7])).encode()).hexdigest()[:16]
-        lock = str((folder / f"{key}.lock").resolve())
-        if lock in _CLAIMED:  # held already by this process (the comparison holds a run, then makes it)
-            yield True
-            return
+        import fcntl
+
+        Path(lock).parent.mkdir(exist_ok=True)
         with open(lock, "a") as handle:
             try:
                 fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -382,6 +374,40 @@ class RunStore:
             finally:
                 _CLAIMED.discard(lock)
                 fcntl.flock(handle, fcntl.LOCK_UN)
+
+    def being_made(self, config: RunConfig) -> bool:
+        """Whether a process holds the run of ``config`` now (:meth:`claim`): it is making that run. Writes
+        nothing, so a read-only store can watch the runs of others."""
+        lock = self._claim_file(config)
+        if lock is None:
+            return False
+        if lock in _CLAIMED:
+            return True
+        import fcntl
+
+        try:
+            handle = open(lock, "rb")  # noqa: SIM115 (closed below)
+        except FileNotFoundError:
+            return False  # never claimed
+        with handle:
+            try:
+                fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
+            except BlockingIOError:
+                return True
+            fcntl.flock(handle, fcntl.LOCK_UN)
+            return False
+
+    def _claim_file(self, config: RunConfig) -> str | None:
+        """The lock file of the run of ``config``; None where runs are not claimed (an in-memory store, a
+        system without ``fcntl``)."""
+        try:
+            import fcntl  # noqa: F401
+        except ImportError:
+            return None
+        if self.path == ":memory:":
+            return None
+        key = hashlib.sha256(json.dumps(list(config[:7])).encode()).hexdigest()[:16]
+        return str(Path(self.path + ".claims", f"{key}.lock").resolve())
 
     def finish_run(self, run_id: int, stop_reason: str) -> None:
         """Record that a run ended, and why."""

@@ -148,7 +148,9 @@ def test_module_entry_point_help():
     assert completed.returncode == 0 and "--budget" in completed.stdout
 
 
-def test_catenary_runs_lists_each_runs_progress(tmp_path, capsys):
+def test_catenary_runs_lists_each_runs_progress(tmp_path, capsys, claimed_elsewhere):
+    """Finished runs with their progress, and of the others which a process is making now and which were
+    interrupted."""
     from catenary_env.cli import main
     from optimizers.ga import GAOptions
     from optimizers.store import RunConfig, RunStore
@@ -157,22 +159,29 @@ def test_catenary_runs_lists_each_runs_progress(tmp_path, capsys):
     done = optimize(
         "synthetic-quadratic", "ga", 24, seed=1, options=GAOptions(population_size=8), store=store
     )
-    with RunStore(store) as runs:  # a run interrupted before its first evaluation
-        runs.start_run(RunConfig("ga", "synthetic-quadratic", 50, 2, None, "test", "{}", "0.1.0"))
-    assert main(["runs", "--store", str(store)]) == 0
-    lines = capsys.readouterr().out.splitlines()
+    interrupted = RunConfig("ga", "synthetic-quadratic", 50, 2, None, "test", "{}", "0.1.0")
+    going = interrupted._replace(seed=3)
+    with RunStore(store) as runs:  # runs before their first evaluation
+        runs.start_run(interrupted)
+        runs.start_run(going)
+    with claimed_elsewhere(store, going):
+        assert main(["runs", "--store", str(store)]) == 0
+        lines = capsys.readouterr().out.splitlines()
+        assert main(["runs", "--store", str(store), "--json"]) == 0
+        first, second, third = json.loads(capsys.readouterr().out)
     expected = f"1 ga synthetic-quadratic 1 300 km/h study {done.n_simulations}/24"
     assert " ".join(lines[1].split()[:8]) == expected
     assert lines[1].split()[8:10] == [f"{done.best_sigma:.3f}", f"{done.stop_reason},"]
-    assert lines[2].split()[4] == "range" and lines[2].endswith("not finished, no evaluation")
-    assert lines[-1].endswith(
-        "2 run(s) in " + str(store) + ", 1 not finished (interrupted, or still running)"
+    assert lines[2].split()[4] == "range" and lines[2].endswith("interrupted, no evaluation")
+    assert lines[3].split()[3] == "3" and lines[3].endswith("running now, no evaluation")
+    assert lines[-1] == (
+        f"3 run(s) in {store}: 1 running now, 1 interrupted (they resume with --resume, or when their study "
+        "runs again)"
     )
-    assert main(["runs", "--store", str(store), "--json"]) == 0
-    first, second = json.loads(capsys.readouterr().out)
     assert first["simulations"] == done.n_simulations and first["best_sigma"] == done.best_sigma
     assert first["evaluations"] == len(done.history) and first["stop_reason"] == done.stop_reason
     assert second["simulations"] == 0 and second["best_sigma"] is None and second["finished_at"] is None
+    assert [r["running"] for r in (first, second, third)] == [False, False, True]
 
 
 def test_catenary_runs_refuses_a_missing_or_empty_store_without_writing(tmp_path, capsys):

@@ -2,9 +2,10 @@
 
     catenary runs [--store PATH] [--json]
 
-For the long studies (docs/problems.md, 'Experiments'): which runs are done, which stopped part-way (an
-interrupted run resumes with ``--resume``, or by running its study again), their simulations against the
-budget and the best σ so far. It only reads the store, so it can watch runs that are writing into it.
+For the long studies (docs/problems.md, 'Experiments'): which runs are done, which a process is making now
+(:meth:`~optimizers.store.RunStore.being_made`), which stopped part-way (an interrupted run resumes with
+``--resume``, or by running its study again), their simulations against the budget and the best σ so far.
+It only reads the store, so it can watch runs that are writing into it.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from typing import Any
 
 from catenary_env.errors import UsageError
 
-from ..store import RunStore
+from ..store import RunConfig, RunStore
 from .optimize import DEFAULT_STORE
 
 __all__ = ["add_parser", "run"]
@@ -52,6 +53,9 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--store {args.store}: no such file (a run store is made by catenary optimize)")
     with RunStore(args.store, read_only=True) as store:
         runs = store.run_progress()
+        for r in runs:  # a run not finished is being made now by some process, or was interrupted
+            config = RunConfig(*(r[name] for name in RunConfig._fields))
+            r["running"] = r["finished_at"] is None and store.being_made(config)
     print(json.dumps(runs) if args.json else _table(runs, args.store))
     return 0
 
@@ -62,8 +66,12 @@ def _table(runs: list[dict[str, Any]], store: str) -> str:
     rows = [COLUMNS] + [_row(r) for r in runs]
     widths = [max(len(row[i]) for row in rows) for i in range(len(COLUMNS))]
     lines = ["  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip() for row in rows]
-    unfinished = sum(r["finished_at"] is None for r in runs)
-    lines.append(f"{len(runs)} run(s) in {store}, {unfinished} not finished (interrupted, or still running)")
+    running = sum(r["running"] for r in runs)
+    interrupted = sum(r["finished_at"] is None and not r["running"] for r in runs)
+    lines.append(
+        f"{len(runs)} run(s) in {store}: {running} running now, {interrupted} interrupted (they resume with "
+        "--resume, or when their study runs again)"
+    )
     return "\n".join(lines)
 
 
@@ -72,10 +80,10 @@ def _row(run: dict[str, Any]) -> tuple[str, ...]:
     best = "–" if run["best_sigma"] is None else f"{run['best_sigma']:.3f}"
     if run["finished_at"] is not None:
         status = f"{run['stop_reason']}, {_time(run['finished_at'])}"
-    elif run["last_evaluation_at"] is not None:
-        status = f"not finished, last evaluation {_time(run['last_evaluation_at'])}"
     else:
-        status = "not finished, no evaluation"
+        state = "running now" if run["running"] else "interrupted"
+        last = run["last_evaluation_at"]
+        status = f"{state}, last evaluation {_time(last)}" if last is not None else f"{state}, no evaluation"
     return (
         str(run["run_id"]), run["optimizer"], run["problem"], str(run["seed"]), speed, run["fidelity"],
         f"{run['simulations']}/{run['budget']}", best, status,
