@@ -50,6 +50,11 @@ from catenary_env.errors import CatenaryError
 from .base import EvaluationRecord
 from .problem import Outcome
 
+try:  # the runs' claims (RunStore.claim) are file locks
+    import fcntl
+except ImportError:  # Windows: runs are not claimed
+    fcntl = None  # type: ignore[assignment]
+
 __all__ = [
     "APPLICATION_ID",
     "EXPORT_SOURCE",
@@ -359,8 +364,6 @@ class RunStore:
         if lock is None or lock in _CLAIMED:  # held already by this process: the comparison holds a run,
             yield True  # then makes it
             return
-        import fcntl
-
         Path(lock).parent.mkdir(exist_ok=True)
         with open(lock, "a") as handle:
             try:
@@ -383,8 +386,6 @@ class RunStore:
             return False
         if lock in _CLAIMED:
             return True
-        import fcntl
-
         try:
             handle = open(lock, "rb")  # noqa: SIM115 (closed below)
         except FileNotFoundError:
@@ -400,11 +401,7 @@ class RunStore:
     def _claim_file(self, config: RunConfig) -> str | None:
         """The lock file of the run of ``config``; None where runs are not claimed (an in-memory store, a
         system without ``fcntl``)."""
-        try:
-            import fcntl  # noqa: F401
-        except ImportError:
-            return None
-        if self.path == ":memory:":
+        if fcntl is None or self.path == ":memory:":
             return None
         key = hashlib.sha256(json.dumps(list(config[:7])).encode()).hexdigest()[:16]
         return str(Path(self.path + ".claims", f"{key}.lock").resolve())
