@@ -165,21 +165,27 @@ class RunRecorder:
         return len(self.history)
 
     def stored(self, index: int, design_key: tuple[int, ...]) -> StoredEvaluation | None:
-        """The stored evaluation ``index`` of a resumed run, checked against the design now asked.
+        """The stored evaluation ``index`` of a resumed run, if it is of the design now asked.
 
-        Raises
-        ------
-        StoreError
-            The run asks another design than it did before: it is not deterministic, or the store's run
-            was made with other settings.
+        Where the run asks another design than it did, it branches off its stored history there: the
+        evaluations stored from ``index`` on are dropped and the run goes on with new ones. Its optimiser
+        proposed every design from the run's own history, so it is still a run of that optimiser and seed,
+        though not the one an uninterrupted run would have made. This happens when a run made on one
+        processor is resumed on another, whose rounding (BLAS kernels, torch's) turns a model-based
+        sampler's or a policy's choice between near-equal designs the other way; on one machine a resumed
+        run replays exactly (docs/problems.md, 'Experiments').
         """
         stored = self._stored.get(index)
-        if stored is not None and stored.design_key != design_key:
-            raise StoreError(
-                f"{self.store.path}: run {self.run_id} does not replay: evaluation {index} was design "
-                f"{stored.design_key}, now {design_key} (same seed and settings should ask the same designs)"
-            )
-        return stored
+        if stored is None or stored.design_key == design_key:
+            return stored
+        dropped = self.store.drop_evaluations(self.run_id, index)
+        self._stored = {i: s for i, s in self._stored.items() if i < index}
+        self.progress.note(
+            f"run {self.run_id} branches off its stored history at evaluation {index}: it asks design "
+            f"{design_key}, where it asked {stored.design_key} (another processor's rounding, or an "
+            f"optimiser that is not deterministic); its {dropped} later stored evaluations are dropped"
+        )
+        return None
 
     def persist(
         self, record: EvaluationRecord, design_key: tuple[int, ...], reward: float | None = None

@@ -533,6 +533,15 @@ class RunStore:
                 ),
             )  # fmt: skip
 
+    def drop_evaluations(self, run_id: int, first: int) -> int:
+        """Delete a run's evaluations from index ``first`` on (a resumed run that branches off its stored
+        history, :meth:`RunRecorder.stored <optimizers.recorder.RunRecorder.stored>`); how many."""
+        with self._connection:
+            cursor = self._connection.execute(
+                "DELETE FROM evaluations WHERE run_id = ? AND idx >= ?", (run_id, first)
+            )
+        return int(cursor.rowcount)
+
     def evaluations(self, run_id: int) -> dict[int, StoredEvaluation]:
         """The stored evaluations of a run by index (gaps where evaluations were lost in flight)."""
         rows = self._connection.execute(

@@ -430,7 +430,9 @@ def test_resume_replays_a_truncated_run(tmp_path, name):
 
 
 @requires("nevergrad")
-def test_resume_refuses_a_run_that_does_not_replay(tmp_path):
+def test_a_resumed_run_that_asks_another_design_branches_off_there(tmp_path, capsys):
+    """A run resumed on another processor may ask another design than it stored (rounding turns a choice
+    between near-equal designs): it keeps what it replayed, drops the rest and goes on from there."""
     path = tmp_path / "runs.sqlite"
     full = optimize(QUADRATIC, "random", budget=10, seed=4, store=path)
     with sqlite3.connect(path) as connection:
@@ -438,8 +440,14 @@ def test_resume_refuses_a_run_that_does_not_replay(tmp_path):
             "UPDATE evaluations SET design_key = '1,2,3' WHERE idx = 3 AND run_id = ?", (full.run_id,)
         )
         connection.execute("DELETE FROM evaluations WHERE idx > 5")
-    with pytest.raises(StoreError, match="does not replay"):
-        optimize(QUADRATIC, "random", budget=10, seed=4, store=path, resume=True)
+    problem = _CountingProblem(QUADRATIC, [])
+    resumed = optimize(problem, "random", budget=10, seed=4, store=path, resume=True, quiet=False)
+    assert "branches off its stored history at evaluation 3" in capsys.readouterr().err
+    assert resumed.run_id == full.run_id
+    assert _comparable(resumed.history) == _comparable(full.history)  # deterministic here: the same run
+    assert len(problem.calls) == 7  # evaluations 3 to 9: 0-2 replayed, 4 and 5 dropped with 3
+    with RunStore(path) as store:
+        assert sorted(store.evaluations(full.run_id)) == list(range(10))
 
 
 class _Terminal(io.StringIO):
