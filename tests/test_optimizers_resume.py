@@ -150,7 +150,7 @@ def test_module_entry_point_help():
 
 def test_catenary_runs_lists_each_runs_progress(tmp_path, capsys, claimed_elsewhere):
     """Finished runs with their progress, and of the others which a process is making now and which were
-    interrupted."""
+    interrupted; a study's collection of given designs (budget 0) is neither."""
     from catenary_env.cli import main
     from optimizers.ga import GAOptions
     from optimizers.store import RunConfig, RunStore
@@ -161,21 +161,24 @@ def test_catenary_runs_lists_each_runs_progress(tmp_path, capsys, claimed_elsewh
     )
     interrupted = RunConfig("ga", "synthetic-quadratic", 50, 2, None, "test", "{}", "0.1.0")
     going = interrupted._replace(seed=3)
+    given = interrupted._replace(optimizer="given-designs", budget=0, seed=0)
     with RunStore(store) as runs:  # runs before their first evaluation
         runs.start_run(interrupted)
         runs.start_run(going)
+        runs.start_run(given)
     with claimed_elsewhere(store, going):
         assert main(["runs", "--store", str(store)]) == 0
         lines = capsys.readouterr().out.splitlines()
         assert main(["runs", "--store", str(store), "--json"]) == 0
-        first, second, third = json.loads(capsys.readouterr().out)
+        first, second, third, _ = json.loads(capsys.readouterr().out)
     expected = f"1 ga synthetic-quadratic 1 300 km/h study {done.n_simulations}/24"
     assert " ".join(lines[1].split()[:8]) == expected
     assert lines[1].split()[8:10] == [f"{done.best_sigma:.3f}", f"{done.stop_reason},"]
     assert lines[2].split()[4] == "range" and lines[2].endswith("interrupted, no evaluation")
     assert lines[3].split()[3] == "3" and lines[3].endswith("running now, no evaluation")
+    assert lines[4].split()[6] == "0" and lines[4].endswith("designs a study gave, no budget")
     assert lines[-1] == (
-        f"3 run(s) in {store}: 1 running now, 1 interrupted (they resume with --resume, or when their study "
+        f"4 run(s) in {store}: 1 running now, 1 interrupted (they resume with --resume, or when their study "
         "runs again)"
     )
     assert first["simulations"] == done.n_simulations and first["best_sigma"] == done.best_sigma

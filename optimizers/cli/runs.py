@@ -67,7 +67,7 @@ def _table(runs: list[dict[str, Any]], store: str) -> str:
     widths = [max(len(row[i]) for row in rows) for i in range(len(COLUMNS))]
     lines = ["  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip() for row in rows]
     running = sum(r["running"] for r in runs)
-    interrupted = sum(r["finished_at"] is None and not r["running"] for r in runs)
+    interrupted = sum(r["finished_at"] is None and not r["running"] and not _given(r) for r in runs)
     lines.append(
         f"{len(runs)} run(s) in {store}: {running} running now, {interrupted} interrupted (they resume with "
         "--resume, or when their study runs again)"
@@ -78,16 +78,24 @@ def _table(runs: list[dict[str, Any]], store: str) -> str:
 def _row(run: dict[str, Any]) -> tuple[str, ...]:
     speed = "range" if run["speed_kmh"] is None else f"{run['speed_kmh']:g} km/h"
     best = "–" if run["best_sigma"] is None else f"{run['best_sigma']:.3f}"
+    last = run["last_evaluation_at"]
     if run["finished_at"] is not None:
         status = f"{run['stop_reason']}, {_time(run['finished_at'])}"
+    elif _given(run):
+        status = "designs a study gave, no budget" + (f", last evaluation {_time(last)}" if last else "")
     else:
         state = "running now" if run["running"] else "interrupted"
-        last = run["last_evaluation_at"]
         status = f"{state}, last evaluation {_time(last)}" if last is not None else f"{state}, no evaluation"
     return (
         str(run["run_id"]), run["optimizer"], run["problem"], str(run["seed"]), speed, run["fidelity"],
-        f"{run['simulations']}/{run['budget']}", best, status,
+        f"{run['simulations']}" + ("" if _given(run) else f"/{run['budget']}"), best, status,
     )  # fmt: skip
+
+
+def _given(run: dict[str, Any]) -> bool:
+    """Whether a run is a collection of designs a study asked to simulate (budget 0, never finished:
+    ``experiments/design_evaluations.py``), not an optimisation run."""
+    return run["budget"] == 0
 
 
 def _time(stamp: str) -> str:
