@@ -173,7 +173,7 @@ class RunRecorder:
         though not the one an uninterrupted run would have made. This happens when a run made on one
         processor is resumed on another, whose rounding (BLAS kernels, torch's) turns a model-based
         sampler's or a policy's choice between near-equal designs the other way; on one machine a resumed
-        run replays exactly (docs/problems.md, 'Experiments').
+        run replays exactly (docs/problems.md, 'Optimisers', Determinism).
         """
         stored = self._stored.get(index)
         if stored is None or stored.design_key == design_key:
