@@ -53,6 +53,7 @@ __all__ = [
     "PARTIAL",
     "archive_path",
     "archive_run",
+    "finished_runs",
     "restore_runs",
     "snapshot_run",
     "write_run_file",
@@ -143,6 +144,19 @@ def restore_runs(store: RunStore, folder: str | Path) -> int:
         run, rows = _read(path)
         restored += store.add_run_rows(run, rows, if_absent=True) is not None
     return restored
+
+
+def finished_runs(folder: str | Path) -> list[tuple[dict[str, Any], list[dict[str, Any]]]]:
+    """The archive's finished runs (snapshots left out), each as its run row and its evaluations' rows in
+    order, in path order; none for a missing folder.
+
+    Raises
+    ------
+    StoreError
+        A file of the folder is not a run file (its path names it).
+    """
+    paths = sorted(p for p in Path(folder).glob("*/*.json.gz") if not p.name.endswith(PARTIAL))
+    return [_read(path) for path in paths]
 
 
 def _read(path: Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
