@@ -356,6 +356,9 @@ def test_from_store_writes_the_finished_runs_and_simulates_nothing(tmp_path, mon
     } == {"random", "de", "ga"}
     assert _check_ioh(folder / "ioh", (SYNTHETIC,), made.budget) == 7
     assert "Partial: 7 of 10 runs" in build_report(tmp_path).read_text(encoding="utf-8")  # catenary report
+    shutil.copytree(folder, tmp_path / "full-protocol" / "optimizers")  # experiments/full_protocol.sh's
+    report = build_report(tmp_path).read_text(encoding="utf-8")
+    assert "\n## optimizers (full-protocol): " in report and report.count("Partial: 7 of 10 runs") == 2
 
 
 def test_from_store_on_a_protocol_not_started_yet(tmp_path, monkeypatch):

@@ -12,6 +12,9 @@ from .experiment import STUDIES
 
 REPORT = "report.md"
 """The report's file name in the studies' folder."""
+FULL_PROTOCOL = "full-protocol"
+"""The folder, in the studies' folder, of the studies' full protocols (`experiments/full_protocol.sh`): a
+study with results there gets a second section, the full protocol's, beside its own."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -33,19 +36,20 @@ def build_report(out: Path) -> Path | None:
     """Write ``out/report.md``: which model made each study's data (:mod:`experiments.model_stamp`), every
     study's tables, re-made from its data without simulating, and its figures; None when no study has data
     under ``out``."""
-    sections, missing = [], []
+    sections, missing, made = [], [], {}
     for name, study in STUDIES.items():
-        folder = Path(out) / name
-        if not (folder.is_dir() and any(folder.rglob("*.csv"))):
+        folders = {name: Path(out) / name, f"{name} ({FULL_PROTOCOL})": Path(out) / FULL_PROTOCOL / name}
+        found = {title: f for title, f in folders.items() if f.is_dir() and any(f.rglob("*.csv"))}
+        if name not in found:
             missing.append(name)
-            continue
-        module = importlib.import_module(f"experiments.{study.module}")
-        text = module.report(folder)
-        figures = [f"![{p.stem}]({p.relative_to(out).as_posix()})" for p in sorted(folder.rglob("*.png"))]
-        sections.append("\n\n".join([f"## {name}: {study.summary}", text, *figures]))
+        for title, folder in found.items():
+            module = importlib.import_module(f"experiments.{study.module}")
+            figures = [f"![{p.stem}]({p.relative_to(out).as_posix()})" for p in sorted(folder.rglob("*.png"))]
+            sections.append("\n\n".join([f"## {title}: {study.summary}", module.report(folder), *figures]))
+        made.update(found)
     if not sections:
         return None
-    sections.insert(0, model_section({name: Path(out) / name for name in STUDIES if name not in missing}))
+    sections.insert(0, model_section(made))
     if missing:
         sections.append(
             "Not run yet: " + ", ".join(f"`catenary experiment {name}`" for name in missing) + "."
