@@ -12,7 +12,7 @@ the archive alone, on any checkout, says what the runs cost:
   resumed later from its snapshot). Runs rebuilt from an export kept no time stamps: their simulation time
   counts, their run time cannot.
 
-    python -m experiments.protocol_cost    # writes results/full-protocol/cost.md
+    python -m experiments.protocol_cost    # writes results/full-protocol/optimizers/cost.md
 """
 
 from __future__ import annotations
@@ -123,10 +123,10 @@ def main(argv: list[str] | None = None) -> None:
         "--archive", type=Path, default=ARCHIVE, help="the run archive (default: %(default)s)"
     )
     parser.add_argument(
-        "--out", type=Path, default=None, help="where to write (default: cost.md beside the archive)"
+        "--out", type=Path, default=None, help="where to write (default: the archive's ../optimizers/cost.md)"
     )
     args = parser.parse_args(argv)
-    out = args.out or args.archive.parent / "cost.md"
+    out = args.out or args.archive.parent / "optimizers" / "cost.md"
     out.write_text(report(args.archive), encoding="utf-8")
     print(out.read_text(encoding="utf-8"))
 
