@@ -104,16 +104,15 @@ def report(archive: Path = ARCHIVE) -> str:
         f"{sum(c['simulation_time_s'] for c in timed) / 3600:.1f} simulation. Per run, in minutes, median "
         "(least–most):",
         "",
-        "| optimiser | catenary | runs timed | run time (min) | simulation time (min) |",
-        "|---|---|---|---|---|",
+        "| optimiser | catenary | runs | simulation time (min) | runs timed | run time (min) |",
+        "|---|---|---|---|---|---|",
     ]
     for (optimizer, catenary), group in sorted(by_group.items()):
         with_time = [c for c in group if c["run_time_s"] is not None]
-        lines.append(
-            f"| {optimizer} | {catenary} | {len(with_time)} of {len(group)} | "
-            f"{_minutes([c['run_time_s'] for c in with_time])} | "
-            f"{_minutes([c['simulation_time_s'] for c in with_time])} |"
-        )
+        simulation = _minutes([c["simulation_time_s"] for c in group])
+        run_time = _minutes([c["run_time_s"] for c in with_time])
+        cells = (optimizer, catenary, len(group), simulation, len(with_time), run_time)
+        lines.append("| " + " | ".join(str(cell) for cell in cells) + " |")
     return "\n".join(lines) + "\n"
 
 

@@ -44,5 +44,5 @@ def test_the_cost_leaves_out_interruptions_cached_designs_and_untimed_run_times(
 
     text = protocol_cost.report(tmp_path)
     assert "| all | 2 | 6 | 5 | 0.0 |" in text
-    assert "| gp | stitched | 1 of 1 | 0.3 (0.3–0.3) | 0.3 (0.3–0.3) |" in text
-    assert "| gp | benchmark | 0 of 1 | – | – |" in text
+    assert "| gp | stitched | 1 | 0.3 (0.3–0.3) | 1 | 0.3 (0.3–0.3) |" in text
+    assert "| gp | benchmark | 1 | 0.1 (0.1–0.1) | 0 | – |" in text
