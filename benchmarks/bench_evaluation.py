@@ -17,6 +17,7 @@ modes, most of them the far field's, so its passage also grows faster than the s
     python benchmarks/bench_evaluation.py --backend numpy --numpy-runs 0
     python benchmarks/bench_evaluation.py --runs 1 --spans 20 --batch 8   # + a generation's throughput
     python benchmarks/bench_evaluation.py --pantographs 2 --runs 5    # two pantographs 200 m apart vs one
+    python benchmarks/bench_evaluation.py --speeds 200 220 240 260 280 300 320   # one design at 7 speeds
 
 Run it on an otherwise idle core (OPENBLAS_NUM_THREADS=1 is set here): timings on shared
 machines are noisy, so quote medians and ratios. The first compiled passage in a process loads
@@ -52,7 +53,7 @@ from catenary_env.fem.layout import Layout, build_layout  # noqa: E402
 from catenary_env.model.definition import CatenaryDefinition  # noqa: E402
 from catenary_env.model.design import level_design, presag_design  # noqa: E402
 from catenary_env.model.presets import load_catenary, load_pantograph  # noqa: E402
-from catenary_env.pipeline import Fidelity, analysis_window, evaluate  # noqa: E402
+from catenary_env.pipeline import Fidelity, analysis_window, evaluate, evaluate_speeds_unchecked  # noqa: E402
 from catenary_env.statics.shape_finding import find_shape  # noqa: E402
 from catenary_env.train import SINGLE, Train  # noqa: E402
 
@@ -157,6 +158,44 @@ def train_comparison(args: argparse.Namespace) -> dict[str, float]:
             flush=True,
         )
     return {"one_s": one, "train_s": two, "ratio": two / one, "sigmas_n": sigmas}
+
+
+def speeds_comparison(args: argparse.Namespace) -> dict[str, object]:
+    """A study evaluation (:func:`study_evaluation`'s) of the level design at each of ``--speeds``: one
+    :func:`~catenary_env.pipeline.evaluate` per speed against one
+    :func:`~catenary_env.pipeline.evaluate_speeds_unchecked` for them all (the statics and the preparation
+    made once), alternately: medians, s, and their ratio."""
+    catenary = load_catenary(args.preset)
+    pantograph = load_pantograph(catenary.pantograph)
+    fidelity = dataclasses.replace(
+        Fidelity(), n_spans=args.main_spans, analysis_spans=max(1, args.main_spans // 2)
+    )
+    design, speeds = level_design(catenary), [v / 3.6 for v in args.speeds]
+    times: dict[str, list[float]] = {"apart": [], "together": []}
+    for run in range(args.runs + 1):  # the first of each warms numba's cache up, untimed
+        t = time.perf_counter()
+        apart = [evaluate(catenary, pantograph, design, v, fidelity, args.uplift) for v in speeds]
+        t_apart = time.perf_counter() - t
+        t = time.perf_counter()
+        together = evaluate_speeds_unchecked(
+            catenary, pantograph, design, [(v, args.uplift) for v in speeds], fidelity
+        )
+        t_together = time.perf_counter() - t
+        if run:
+            times["apart"].append(t_apart)
+            times["together"].append(t_together)
+    if len(together) != len(speeds) or [e.statistics for e in apart] != [e.statistics for e in together]:
+        raise RuntimeError("the evaluations at several speeds differ from those one speed at a time")
+    one, all_ = statistics.median(times["apart"]), statistics.median(times["together"])
+    if not args.json:
+        print(
+            f"span-modes {args.main_spans} spans, the level design at "
+            + ", ".join(f"{v:g}" for v in args.speeds)
+            + f" km/h: one evaluation per speed {one:.2f} s, all speeds in one {all_:.2f} s (medians of "
+            f"{args.runs}): ratio {all_ / one:.2f}; the same statistics",
+            flush=True,
+        )
+    return {"apart_s": one, "together_s": all_, "ratio": all_ / one, "speeds_kmh": list(args.speeds)}
 
 
 def backend_comparison(
@@ -372,10 +411,17 @@ def main() -> int:
         help="with 2 or more: time a study evaluation of that many pantographs against one, alone",
     )
     parser.add_argument("--spacing", type=float, default=200.0, help="pantograph spacing, m (default 200)")
+    parser.add_argument(
+        "--speeds",
+        type=float,
+        nargs="+",
+        default=[],
+        help="with 2 or more, km/h: time a study evaluation at these speeds, together and one by one, alone",
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON summary")
     args = parser.parse_args()
-    if args.pantographs > 1:
-        comparison = train_comparison(args)
+    if len(args.speeds) > 1 or args.pantographs > 1:
+        comparison = speeds_comparison(args) if len(args.speeds) > 1 else train_comparison(args)
         if args.json:
             print(json.dumps(comparison))
         return 0

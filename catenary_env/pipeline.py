@@ -12,7 +12,7 @@ from __future__ import annotations
 import functools
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -481,21 +481,78 @@ def evaluate_unchecked(
     :func:`~catenary_env.model.design.check_speed`, the fidelity :func:`check_fidelity` and the uplift
     force (N) :func:`check_uplift`: a design is validated once, at the boundary.
     """
+    (evaluation,) = _evaluate_speeds(
+        catenary, pantograph, design, [(speed, uplift_force)], fidelity, buildability, deviations, train
+    )
+    return evaluation
+
+
+def _evaluate_speeds(
+    catenary: CatenaryDefinition,
+    pantograph: PantographDefinition,
+    design: Design,
+    passages: Iterable[tuple[float, float]],
+    fidelity: Fidelity,
+    buildability: BuildabilityLimits = NO_LIMITS,
+    deviations: SectionDeviations | None = None,
+    train: Train = SINGLE,
+) -> list[Evaluation]:
+    """:func:`evaluate_unchecked` at several speeds: one design's evaluation for each (speed m/s, uplift
+    force N) of ``passages``, in order, up to the first at which the design is infeasible.
+
+    The statics, the linear system and the dynamic model's preparation do not depend on the speed or the
+    uplift force, so they are made once and every passage runs on them (docs/performance.md, 'Speed'): the
+    evaluations are those of :func:`evaluate_unchecked` at each speed, number for number. A statically
+    infeasible design gives one evaluation. ``passages`` is read one pair at a time, so a caller may
+    calibrate each uplift force only when its speed is reached. Each evaluation's ``wall_time`` is its
+    passage's; the first's also the shared part's.
+    """
     start = time.perf_counter()
-    force = uplift_force  # N, checked by the caller
+    passages = iter(passages)
+    speed, force = next(passages)
     try:
         static = _find_static(catenary, design, fidelity, deviations)
     except ShapeFindingError as error:
         unknown = (math.nan,) * len(CONSTRAINTS)
         wall_time = time.perf_counter() - start
-        return Evaluation(False, f"static: {error}", None, (), (), force, wall_time, constraints=unknown)
+        return [Evaluation(False, f"static: {error}", None, (), (), force, wall_time, constraints=unknown)]
     lengths, forces = _central_span(static, design)
     reason = static.infeasibility() or buildability_violation(static, buildability)
     if reason:
         wall_time = time.perf_counter() - start
         constraints = _constraints(static, math.nan, buildability)
-        return Evaluation(False, reason, None, lengths, forces, force, wall_time, constraints=constraints)
-    sim = run_passage(static, pantograph, speed, fidelity, force, statistics_only=True, train=train)
+        return [Evaluation(False, reason, None, lengths, forces, force, wall_time, constraints=constraints)]
+    system = linearise(static)
+    prepared = prepare_dynamics(system, fidelity)
+    evaluations: list[Evaluation] = []
+    while True:
+        sim = run_passage(
+            static, pantograph, speed, fidelity, force, system, prepared=prepared, statistics_only=True,
+            train=train,
+        )  # fmt: skip
+        evaluations.append(_dynamic_evaluation(sim, lengths, forces, buildability, train, start))
+        pair = next(passages, None)
+        if not evaluations[-1].feasible or pair is None:
+            return evaluations
+        speed, force = pair
+        start = time.perf_counter()
+
+
+# Public under its own name, so that a test may replace it without touching evaluate_unchecked (which the
+# fingerprint's canaries call).
+evaluate_speeds_unchecked = single_threaded(_evaluate_speeds)
+
+
+def _dynamic_evaluation(
+    sim: Simulation,
+    lengths: tuple[float, ...],
+    forces: tuple[float, ...],
+    buildability: BuildabilityLimits,
+    train: Train,
+    start: float,
+) -> Evaluation:
+    """The evaluation of a statically feasible design's passage ``sim`` (``start``: its wall clock, s)."""
+    reason = ""
     for i, stats in enumerate(sim.pantograph_statistics):
         if stats.contact_loss_percent > 0.0 and not reason:
             which = f"pantograph {i + 1}: " if train.trailing else ""
@@ -506,7 +563,7 @@ def evaluate_unchecked(
     position, filtered = _trace(sim)
     blocks = sim.pantograph_statistics
     objective = objective_sigma(blocks, train.objective) if train.trailing else None
-    constraints = _constraints(static, max(stats.contact_loss_percent for stats in blocks), buildability)
+    constraints = _constraints(sim.static, max(stats.contact_loss_percent for stats in blocks), buildability)
     wall_time = time.perf_counter() - start
     return Evaluation(
         not reason,
@@ -514,7 +571,7 @@ def evaluate_unchecked(
         sim.statistics,
         lengths,
         forces,
-        force,
+        sim.uplift_force,
         wall_time,
         position,
         filtered,

@@ -22,9 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from catenary_env.problems import evaluate_problem, get_problem
+from catenary_env.problems import get_problem
 from catenary_env.problems.design_problem import DesignProblem
-from catenary_env.problems.speeds import evaluate_over_speeds
 from optimizers.base import EvaluationRecord
 from optimizers.catenary_adapter import catenary_problem
 from optimizers.evaluation import make_backend
@@ -129,13 +128,11 @@ def simulate_mean_sigma(
     problem: str, speeds_kmh: tuple[float, ...], x: tuple[float, ...], speed_kmh: float, fidelity: str
 ) -> Outcome:
     """The mean σ of a design over ``speeds_kmh``
-    (:func:`~catenary_env.problems.speeds.evaluate_over_speeds`): picklable, for worker processes.
+    (:meth:`~catenary_env.problems.DesignProblem.evaluate_speeds`): picklable, for worker processes.
 
     ``speed_kmh`` (the driver's) is not used: the speeds are the problem's.
     """
-    result = evaluate_over_speeds(
-        functools.partial(evaluate_problem, problem, tuple(x), fidelity=fidelity), speeds_kmh
-    )
+    result = get_problem(problem).evaluate_speeds(x, speeds_kmh, fidelity)
     return Outcome(result.feasible, result.sigma(), result.reason, result.wall_time)
 
 

@@ -76,6 +76,14 @@ class FakeSimulator:
             0.25,
         )
 
+    def evaluate_speeds(self, catenary, pantograph, design, passages, fidelity, *options, train=None):  # type: ignore[no-untyped-def]
+        out = []
+        for speed, force in passages:
+            out.append(self.evaluate(catenary, pantograph, design, speed, fidelity, force))
+            if not out[-1].feasible:
+                break
+        return out
+
     def calibrate_uplift(self, catenary, pantograph, design, speed, fidelity, target_mean):  # type: ignore[no-untyped-def]
         self.calibrations += 1
         return target_mean + 4.0
@@ -89,6 +97,7 @@ def fake_simulator(monkeypatch: pytest.MonkeyPatch) -> Iterator[FakeSimulator]:
     clear_caches()
     monkeypatch.setattr(pipeline, "evaluate", fake.evaluate)
     monkeypatch.setattr(pipeline, "evaluate_unchecked", fake.evaluate)
+    monkeypatch.setattr(pipeline, "evaluate_speeds_unchecked", fake.evaluate_speeds)
     monkeypatch.setattr(pipeline, "calibrate_uplift", fake.calibrate_uplift)
     yield fake
     clear_caches()

@@ -45,6 +45,7 @@ def _no_simulation(monkeypatch: pytest.MonkeyPatch) -> None:
         raise AssertionError("a design was simulated")
 
     monkeypatch.setattr(DesignProblem, "evaluate", refuse)
+    monkeypatch.setattr(DesignProblem, "evaluate_speeds", refuse)
     monkeypatch.setattr(synthetic, "simulate_quadratic", refuse)
 
 

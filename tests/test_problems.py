@@ -280,6 +280,7 @@ def test_invalid_design_in_bounds_is_infeasible_without_simulating(monkeypatch: 
 
     monkeypatch.setattr(pipeline, "evaluate", no_simulation)
     monkeypatch.setattr(pipeline, "evaluate_unchecked", no_simulation)
+    monkeypatch.setattr(pipeline, "evaluate_speeds_unchecked", no_simulation)
     try:
         evaluation = PROBLEMS["SW3"].evaluate([9.0, 20.0, 0.0, 0.0, 0.0], 300.0, "test")
     finally:
@@ -318,10 +319,14 @@ def test_uplift_is_calibrated_once_per_catenary_speed_and_fidelity_on_the_refere
         used.append(uplift_force)
         return Evaluation(True, "", None, (), (), float(uplift_force), 0.0)
 
+    def evaluate_speeds(catenary, pantograph, design, passages, fidelity, *options, train=None):  # type: ignore[no-untyped-def]
+        return [evaluate(catenary, pantograph, design, v, fidelity, force) for v, force in passages]
+
     clear_caches()
     monkeypatch.setattr(pipeline, "calibrate_uplift", calibrate)
     monkeypatch.setattr(pipeline, "evaluate", evaluate)
     monkeypatch.setattr(pipeline, "evaluate_unchecked", evaluate)
+    monkeypatch.setattr(pipeline, "evaluate_speeds_unchecked", evaluate_speeds)
     try:
         PROBLEMS["B1"].evaluate([0.0] * 5, 300.0, "test")
         PROBLEMS["B3"].evaluate(

@@ -264,7 +264,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         clipped = bool(np.any(values < -1.0) or np.any(values > 1.0))
         x = self.action_to_x(values)
         with quiet_calibrations():  # a training loop meets many speeds: no two lines on stderr for each
-            result = evaluate_over_speeds(functools.partial(self._evaluate, x), self._speeds)
+            result = self._evaluate(x)
             objective = self._objective(result)
             reward = -objective / self._reference_objective() if self.normalize_reward else -objective
         design = self.problem.design(x)
@@ -301,17 +301,27 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     # -- helpers ------------------------------------------------------------------------------------------
 
-    def _evaluate(self, x: NDArray[np.float64], speed: float) -> Evaluation:
-        key = (tuple(x.tolist()), speed)
-        if key in self._memo:
+    def _evaluate(self, x: NDArray[np.float64]) -> SpeedsEvaluation:
+        """The design at the env's speeds: those it has met before from the memo, the rest in one
+        :meth:`~catenary_env.problems.DesignProblem.evaluate_speeds` (one statics for all of them)."""
+        design_key = tuple(x.tolist())
+        evaluations: list[Evaluation] = []
+        for i, speed in enumerate(self._speeds):
+            key = (design_key, speed)
+            if key not in self._memo:
+                rest = self.problem.evaluate_speeds(x, self._speeds[i:], self.fidelity, train=self.train)
+                self.evaluation_count += len(rest.evaluations)
+                for v, evaluation in zip(self._speeds[i:], rest.evaluations, strict=False):
+                    self._memo[design_key, v] = evaluation
+                while len(self._memo) > MEMO_SIZE:
+                    self._memo.popitem(last=False)
+                evaluations.extend(rest.evaluations)
+                break
             self._memo.move_to_end(key)
-            return self._memo[key]
-        evaluation = self.problem.evaluate(x, speed, self.fidelity, train=self.train)
-        self.evaluation_count += 1
-        self._memo[key] = evaluation
-        if len(self._memo) > MEMO_SIZE:
-            self._memo.popitem(last=False)
-        return evaluation
+            evaluations.append(self._memo[key])
+            if not evaluations[-1].feasible:
+                break
+        return SpeedsEvaluation(self._speeds, tuple(evaluations))
 
     def _objective(self, result: SpeedsEvaluation) -> float:
         worst = self.objective == "worst_sigma_over_speeds"

@@ -29,7 +29,7 @@ Examples
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -53,6 +53,7 @@ from ..train import SINGLE, Train
 from .best_known import BestKnown, best_known_table
 from .grid import DesignGrid
 from .reference import calibrated_uplift, preset_catenary, preset_pantograph, reference_evaluation
+from .speeds import SpeedsEvaluation, evaluate_over_speeds
 from .tolerance import RobustObjective, ToleranceEvaluation, evaluate_under_tolerances, robust_evaluation
 
 __all__ = ["DesignProblem", "resolve_fidelity"]
@@ -364,25 +365,75 @@ class DesignProblem:
                 x, robust.tolerances, robust.draws, robust.seed, speed_kmh, fidelity, uplift_force
             )
             return robust_evaluation(result, robust, float(speed_kmh))
+        forces = None if uplift_force is None else (uplift_force,)
+        return self.evaluate_speeds(x, (speed_kmh,), fidelity, forces, deviations, train).evaluations[0]
+
+    def evaluate_speeds(
+        self,
+        x: ArrayLike,
+        speeds_kmh: Sequence[float],
+        fidelity: str | Fidelity = "study",
+        uplift_forces: Sequence[float] | None = None,
+        deviations: SectionDeviations | None = None,
+        train: Train = SINGLE,
+    ) -> SpeedsEvaluation:
+        """:meth:`evaluate` at each of ``speeds_kmh`` in turn, up to the first speed at which the design is
+        infeasible (:class:`~catenary_env.problems.speeds.SpeedsEvaluation`).
+
+        The design is built and shape-found once, and its linear system and the dynamic model's preparation
+        made once, for all the speeds (they do not depend on the speed): the evaluations equal
+        :meth:`evaluate`'s at each speed, and cost one passage each after the first (docs/performance.md,
+        'Speed'). ``uplift_forces``: one per speed, N (default the problem's, :meth:`uplift_force`,
+        calibrated when its speed is reached). With :attr:`robust`, each speed is its own robust
+        evaluation. Raises ``ValueError`` as :meth:`evaluate` does, for every speed before any simulation.
+        """
+        speeds = tuple(float(v) for v in speeds_kmh)
+        if not speeds:
+            raise ValueError("speeds_kmh: give at least one speed (km/h)")
+        if uplift_forces is not None and len(uplift_forces) != len(speeds):
+            raise ValueError(
+                f"uplift_forces: {len(uplift_forces)} given for {len(speeds)} speeds; give one per speed (N)"
+            )
+        catenary = self.catenary_definition
+        for v in speeds:
+            check_speed(catenary, v / 3.6)
+        if self.robust is not None:
+            if deviations is not None:
+                raise ValueError("deviations: a robust problem draws its own; give none")
+            forces = iter((None,) * len(speeds) if uplift_forces is None else uplift_forces)
+            return evaluate_over_speeds(
+                lambda v: self.evaluate(x, v, fidelity, next(forces), train=train), speeds
+            )
         design = self.design(x)
         resolved = resolve_fidelity(fidelity)
-        catenary = self.catenary_definition
-        speed = float(speed_kmh) / 3.6
-        check_speed(catenary, speed)
-        force = self.uplift_force(speed_kmh, resolved) if uplift_force is None else float(uplift_force)
+        pantograph = self.pantograph_definition
+        for force in uplift_forces or ():
+            check_uplift(pantograph, float(force))
         try:
             check_design(catenary, design)
             check_section_deviations(catenary, design, resolved, deviations)
         except DesignError as error:
+            force = (
+                self.uplift_force(speeds[0], resolved) if uplift_forces is None else float(uplift_forces[0])
+            )
             unknown = (np.nan,) * len(pipeline.CONSTRAINTS)
-            return Evaluation(False, f"design: {error}", None, (), (), force, 0.0, constraints=unknown)
-        pantograph = self.pantograph_definition
-        check_uplift(pantograph, force)
+            design_error = Evaluation(
+                False, f"design: {error}", None, (), (), force, 0.0, constraints=unknown
+            )
+            return SpeedsEvaluation(speeds, (design_error,))
         check_fidelity(catenary, resolved)
         train.check(catenary, resolved.n_spans, pipeline.analysis_window(catenary, resolved)[1])
-        return pipeline.evaluate_unchecked(
-            catenary, pantograph, design, speed, resolved, force, self.buildability, deviations, train
+
+        def passages() -> Iterator[tuple[float, float]]:
+            for i, v in enumerate(speeds):
+                force = self.uplift_force(v, resolved) if uplift_forces is None else float(uplift_forces[i])
+                check_uplift(pantograph, force)
+                yield v / 3.6, force
+
+        evaluations = pipeline.evaluate_speeds_unchecked(
+            catenary, pantograph, design, passages(), resolved, self.buildability, deviations, train
         )
+        return SpeedsEvaluation(speeds, tuple(evaluations))
 
     def evaluate_tolerances(
         self,
