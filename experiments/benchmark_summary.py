@@ -31,7 +31,8 @@ def block(root: Path = ROOT) -> str:
     text = (root / FOLDER / "optimizers.md").read_text(encoding="utf-8")
     first = text.split("\n", 1)[0]
     parts = [START]
-    if first.startswith("Partial: "):
+    partial = first.startswith("Partial: ")
+    if partial:
         parts.append(f"**{first}**")
     for section in text.split("\n### ")[1:]:
         heading, _, body = section.partition("\n")
@@ -42,13 +43,17 @@ def block(root: Path = ROOT) -> str:
             parts.append(
                 f"![share of (run, target) pairs reached against simulations, targets 1-10 % above]({figure})"
             )
-    parts += ["#### What the best-known designs say about the GA design studies", _best_known(root), END]
+    parts += [
+        "#### What the best-known designs say about the GA design studies",
+        _best_known(root, partial),
+        END,
+    ]
     return "\n\n".join(parts)
 
 
-def _best_known(root: Path) -> str:
+def _best_known(root: Path, partial: bool) -> str:
     """Per problem, whether the design study's optimum is still the best-known design, and how close the
-    benchmark's best run came."""
+    benchmark's best run came (``partial``: of the runs finished so far)."""
     table = json.loads((root / "catenary_env" / "problems" / "best_known.json").read_text(encoding="utf-8"))
     closest: dict[str, tuple[float, str]] = {}
     for row in read_csv(root / FOLDER / "summary.csv"):
@@ -64,7 +69,8 @@ def _best_known(root: Path) -> str:
             runs = "no run of the benchmark has finished"
             if best:
                 above = 100 * (best[0] / sigma - 1)
-                runs = f"the benchmark's best run so far, {best[1]}'s, came to {best[0]:.3f} N "
+                so_far = " so far" if partial else ""
+                runs = f"the benchmark's best run{so_far}, {best[1]}'s, came to {best[0]:.3f} N "
                 runs += f"({above:.2f} % above)"
             lines.append(f"- {problem}: the design study's optimum, {exact}, is the best known; {runs}.")
         elif summary.is_file():
