@@ -45,6 +45,7 @@ class FakeSimulator:
 
     calls: list[tuple[Design, float]] = field(default_factory=list)
     calibrations: int = 0
+    batches: list[int] = field(default_factory=list)  # the evaluations of each call at several speeds
 
     def evaluate(
         self, catenary, pantograph, design, speed, fidelity, uplift_force=None, *options, train=None
@@ -82,6 +83,7 @@ class FakeSimulator:
             out.append(self.evaluate(catenary, pantograph, design, speed, fidelity, force))
             if not out[-1].feasible:
                 break
+        self.batches.append(len(out))
         return out
 
     def calibrate_uplift(self, catenary, pantograph, design, speed, fidelity, target_mean):  # type: ignore[no-untyped-def]
@@ -306,6 +308,24 @@ def test_a_repeated_design_is_not_simulated_again(fake_simulator: FakeSimulator)
     second = env.step(np.full(5, 0.3001, np.float32))  # the same grid point
     assert len(fake_simulator.calls) == 1 and env.unwrapped.evaluation_count == 1
     assert first[1] == second[1] and first[4]["wall_time"] == second[4]["wall_time"]
+
+
+def test_a_design_is_simulated_at_all_its_speeds_at_once_and_remembered_at_each(
+    fake_simulator: FakeSimulator,
+) -> None:
+    env = make("Catenary-B1-v0", objective="mean_sigma_over_speeds", speeds_kmh=(200.0, 250.0, 300.0))
+    env.reset(seed=0)
+    env.step(np.full(5, 0.3, np.float32))
+    assert (
+        fake_simulator.batches == [3] and env.unwrapped.evaluation_count == 3
+    )  # one statics, three passages
+    env.step(np.full(5, 0.3001, np.float32))  # the same grid point: from the memo
+    assert fake_simulator.batches == [3] and env.unwrapped.evaluation_count == 3
+    lost = np.full(5, -1.0, np.float32)  # the wire 20 mm low everywhere: contact lost at the first speed
+    _, _, _, _, info = env.step(lost)
+    assert fake_simulator.batches == [3, 1] and not info["feasible"]
+    env.step(lost)
+    assert fake_simulator.batches == [3, 1] and env.unwrapped.evaluation_count == 4
 
 
 @pytest.mark.parametrize(

@@ -10,8 +10,10 @@ import numpy as np
 import pytest
 
 from catenary_env import pipeline
-from catenary_env.problems import PROBLEMS, clear_caches
+from catenary_env.model.tolerances import Tolerances, draw_deviations
+from catenary_env.problems import PROBLEMS
 from catenary_env.problems.speeds import SpeedsEvaluation
+from catenary_env.problems.tolerance import RobustObjective
 from catenary_env.statics import shape_finding
 
 SPEEDS = (200.0, 250.0)
@@ -33,12 +35,11 @@ def test_each_speed_equals_its_own_evaluation_and_the_statics_is_found_once(
 ) -> None:
     fidelity = dataclasses.replace(pipeline.FIDELITIES["test"], dynamics=dynamics)
     problem = PROBLEMS["B1"]
-    x = X
-    alone = [problem.evaluate(x, v, fidelity, f) for v, f in zip(SPEEDS, FORCES, strict=True)]
+    alone = [problem.evaluate(X, v, fidelity, f) for v, f in zip(SPEEDS, FORCES, strict=True)]
     found = []
     real = shape_finding.find_shape
     monkeypatch.setattr(pipeline, "find_shape", lambda *a, **k: found.append(1) or real(*a, **k))
-    together = problem.evaluate_speeds(x, SPEEDS, fidelity, FORCES)
+    together = problem.evaluate_speeds(X, SPEEDS, fidelity, FORCES)
     assert isinstance(together, SpeedsEvaluation) and together.speeds_kmh == SPEEDS
     assert len(found) == 1
     assert [e.feasible for e in alone] == [True, True]
@@ -61,12 +62,27 @@ def test_it_stops_at_the_first_infeasible_speed() -> None:
 
 def test_a_statically_infeasible_design_is_one_evaluation() -> None:
     problem = PROBLEMS["B1"]
-    compressed = (-0.02, -0.02, 0.02, 0.02, 0.02)  # the wire pushed up at the supports' droppers
+    compressed = (-0.02, -0.02, 0.02, 0.02, 0.02)  # 20 mm low by the supports, 20 mm high mid-span
     alone = problem.evaluate(compressed, SPEEDS[0], "test", FORCES[0])
     assert alone.reason.startswith("static:")
     result = problem.evaluate_speeds(compressed, SPEEDS, "test", FORCES)
     assert len(result.evaluations) == 1
     _same(alone, result.evaluations[0])
+
+
+def test_a_built_section_and_the_robust_objective_at_several_speeds() -> None:
+    problem = PROBLEMS["B1"]
+    tolerances = Tolerances(0.002, 0.05)
+    fidelity = pipeline.FIDELITIES["test"]
+    deviations = draw_deviations(tolerances, fidelity.n_spans, problem.n_droppers, seed=1, draw=0)
+    alone = [problem.evaluate(X, v, "test", f, deviations) for v, f in zip(SPEEDS, FORCES, strict=True)]
+    together = problem.evaluate_speeds(X, SPEEDS, "test", FORCES, deviations)
+    for a, b in zip(alone, together.evaluations, strict=True):
+        _same(a, b)
+    robust = problem.with_options(robust=RobustObjective(tolerances, 2, 1))
+    alone = [robust.evaluate(X, v, "test", f) for v, f in zip(SPEEDS, FORCES, strict=True)]
+    together = robust.evaluate_speeds(X, SPEEDS, "test", FORCES)
+    assert [a.statistics for a in alone] == [b.statistics for b in together.evaluations]
 
 
 def test_bad_input_is_refused_for_every_speed_before_any_solve(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -83,4 +99,3 @@ def test_bad_input_is_refused_for_every_speed_before_any_solve(monkeypatch: pyte
         problem.evaluate_speeds([0.0] * 5, (250.0, 300.0), "test", (150.0, -1.0))
     with pytest.raises(ValueError, match="speeds_kmh"):
         problem.evaluate_speeds([0.0] * 5, (), "test")
-    clear_caches()
