@@ -136,11 +136,11 @@ def restore_runs(store: RunStore, folder: str | Path) -> int:
         A file of the folder is not a run file (its path names it), or the store holds the run as made by
         another package version.
     """
-    paths = sorted(Path(folder).glob("*/*.json.gz"))
-    finished = {p for p in paths if not p.name.endswith(PARTIAL)}
-    snapshots = [p for p in paths if p.name.endswith(PARTIAL) and _finished_path(p) not in finished]
+    finished, snapshots = _run_files(folder)
+    done = set(finished)
+    unfinished = [p for p in snapshots if _finished_path(p) not in done]
     restored = 0
-    for path in sorted(finished) + snapshots:  # a run's file, else its snapshot
+    for path in finished + unfinished:  # a run's file, else its snapshot
         run, rows = _read(path)
         restored += store.add_run_rows(run, rows, if_absent=True) is not None
     return restored
@@ -155,8 +155,13 @@ def finished_runs(folder: str | Path) -> list[tuple[dict[str, Any], list[dict[st
     StoreError
         A file of the folder is not a run file (its path names it).
     """
-    paths = sorted(p for p in Path(folder).glob("*/*.json.gz") if not p.name.endswith(PARTIAL))
-    return [_read(path) for path in paths]
+    return [_read(path) for path in _run_files(folder)[0]]
+
+
+def _run_files(folder: str | Path) -> tuple[list[Path], list[Path]]:
+    """The archive's finished runs' files and its snapshots, each in path order."""
+    paths = sorted(Path(folder).glob("*/*.json.gz"))
+    return [p for p in paths if not p.name.endswith(PARTIAL)], [p for p in paths if p.name.endswith(PARTIAL)]
 
 
 def _read(path: Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
