@@ -1,5 +1,6 @@
-"""What the optimiser benchmark's full protocol cost, measured from its run archive (docs/performance.md, 'The
-full protocol of the optimiser benchmark').
+"""What a long study cost, measured from its run archive: the optimiser benchmark's full protocol
+(docs/performance.md, 'The full protocol of the optimiser benchmark'), the amortised RL study ('The full
+studies').
 
 Every evaluation in the archive carries its time stamp (to the second) and the wall time of its simulation, so
 the archive alone, on any checkout, says what the runs cost:
@@ -13,6 +14,8 @@ the archive alone, on any checkout, says what the runs cost:
   counts, their run time cannot.
 
     python -m experiments.protocol_cost    # writes results/full-protocol/optimizers/cost.md
+    python -m experiments.protocol_cost --archive results/rl/amortised/archive --cores 2 \
+        --title "The amortised RL study's cost" --out results/rl/amortised/cost.md
 """
 
 from __future__ import annotations
@@ -34,7 +37,8 @@ INTERRUPTION = 600.0
 """s: a gap between a run's evaluations longer than this is an interruption, not work (a `gp` ask takes some
 3 s, a PPO update under a second)."""
 CATENARY = {"B": "benchmark", "SW": "stitched"}
-"""The catenary of a problem, by the letters its name starts with (docs/problems.md)."""
+"""The catenary of a problem, by the letters its name starts with (docs/problems.md); another problem (a
+synthetic one) stands for itself."""
 
 
 def _seconds(stamp: str) -> float:
@@ -55,7 +59,7 @@ def run_cost(run: dict[str, Any], rows: list[dict[str, Any]]) -> dict[str, Any]:
     return {
         "optimizer": run["optimizer"],
         "problem": problem,
-        "catenary": next(name for prefix, name in CATENARY.items() if problem.startswith(prefix)),
+        "catenary": next((name for prefix, name in CATENARY.items() if problem.startswith(prefix)), problem),
         "charged": sum(int(r["charged"]) for r in rows),
         "simulated": len(simulated),
         "simulation_time_s": sum(float(r["wall_time"]) for r in simulated),
@@ -69,8 +73,19 @@ def _minutes(values: list[float]) -> str:
     return f"{statistics.median(values) / 60:.1f} ({min(values) / 60:.1f}–{max(values) / 60:.1f})"
 
 
-def report(archive: Path = ARCHIVE) -> str:
-    """The cost of the archive's finished runs, as markdown."""
+def _hours(run_time_s: float, cores: int) -> str:
+    """Run time in core-hours, and in hours on the cores where a run held more than one."""
+    core_hours = run_time_s * cores / 3600
+    if cores == 1:
+        return f"{core_hours:.1f} core-hours"
+    return f"{run_time_s / 3600:.1f} h on {cores} cores ({core_hours:.1f} core-hours)"
+
+
+def report(archive: Path = ARCHIVE, title: str = "The full protocol's cost", cores: int = 1) -> str:
+    """The cost of the archive's finished runs, as markdown; ``cores``: the cores each run held (1: one
+    lane per core; 2: a run stepping two envs or two GA workers)."""
+    if cores < 1:
+        raise ValueError(f"cores = {cores}: must be at least 1")
     costs = [run_cost(run, rows) for run, rows in finished_runs(archive)]
     if not costs:
         raise SystemExit(f"{archive}: no finished run")
@@ -80,17 +95,26 @@ def report(archive: Path = ARCHIVE) -> str:
         by_group[cost["optimizer"], cost["catenary"]].append(cost)
     timed = [c for c in costs if c["run_time_s"] is not None]
     lines = [
-        "# The full protocol's cost",
+        f"# {title}",
         "",
         f"Written by `python -m experiments.protocol_cost` from the run archive ({len(costs)} finished runs"
         + (f"; model `{stamp.simulator}`" if stamp else "")
-        + "). Times are wall times of one process on one core of the 2-core machine, each lane beside the "
-        "other.",
+        + "). "
+        + (
+            "Times are wall times of one process on one core of the 2-core machine, each lane beside the "
+            "other."
+            if cores == 1
+            else f"Each run held {cores} cores (its simulations in {cores} processes at once): a simulation "
+            f"time is the sum of its simulations' wall times (core time), a run time its wall time on the "
+            f"{cores} cores."
+        ),
         "",
         "| | runs | simulations charged | simulated | simulation time (core-h) |",
         "|---|---|---|---|---|",
     ]
-    for name in (*CATENARY.values(), "all"):
+    present = [c["catenary"] for c in costs]
+    others = sorted(set(present) - set(CATENARY.values()))  # a synthetic problem, by its name
+    for name in (*(n for n in CATENARY.values() if n in present), *others, "all"):
         group = [c for c in costs if name in (c["catenary"], "all")]
         hours = sum(c["simulation_time_s"] for c in group) / 3600
         lines.append(
@@ -100,9 +124,9 @@ def report(archive: Path = ARCHIVE) -> str:
     lines += [
         "",
         f"Run time of the {len(timed)} runs with time stamps (the others were rebuilt from an export): "
-        f"{sum(c['run_time_s'] for c in timed) / 3600:.1f} core-hours, of which "
-        f"{sum(c['simulation_time_s'] for c in timed) / 3600:.1f} simulation. Per run, in minutes, median "
-        "(least–most):",
+        + _hours(sum(c["run_time_s"] for c in timed), cores)
+        + f", against {sum(c['simulation_time_s'] for c in timed) / 3600:.1f} core-hours of simulation. Per "
+        "run, in minutes, median (least–most):",
         "",
         "| optimiser | catenary | runs | simulation time (min) | runs timed | run time (min) |",
         "|---|---|---|---|---|---|",
@@ -124,9 +148,15 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument(
         "--out", type=Path, default=None, help="where to write (default: the archive's ../optimizers/cost.md)"
     )
+    parser.add_argument("--title", default="The full protocol's cost", help="the report's title")
+    parser.add_argument(
+        "--cores", type=int, default=1, help="cores each run held: 1 (a lane per core, default) or more"
+    )
     args = parser.parse_args(argv)
+    if args.cores < 1:
+        parser.error(f"--cores {args.cores}: must be at least 1")
     out = args.out or args.archive.parent / "optimizers" / "cost.md"
-    out.write_text(report(args.archive), encoding="utf-8")
+    out.write_text(report(args.archive, args.title, args.cores), encoding="utf-8")
     print(out.read_text(encoding="utf-8"))
 
 

@@ -29,7 +29,8 @@ steps, which gives the same policy) and simulates only the rest.
 
 Outputs (``out/rl/amortised/``): ``steps.csv`` (every training step), ``ga_runs.csv``, ``ga_curves.csv``
 (the GA's best σ after each simulation), ``designs.csv`` (every design simulated at each speed),
-``ledger.csv``; ``amortised.md`` (tables), ``learning_curves.png``, ``ledger.png``; ``policies/`` (each
+``ledger.csv``; ``amortised.md`` (tables), ``learning_curves.png``, ``ledger.png``; with ``--archive``,
+``cost.md`` (the simulations and hours of the archive's finished runs); ``policies/`` (each
 policy, loadable with ``catenary propose``, and beside it ``<policy>.txt``, the command that reproduces
 its run).
 
@@ -55,7 +56,7 @@ from typing import Any
 
 import numpy as np
 
-from optimizers.archive import restore_runs
+from optimizers.archive import finished_runs, restore_runs
 from optimizers.base import OptimizationResult
 from optimizers.ga import POPULATION_SIZES, GAOptions
 from optimizers.problem_registry import resolve_problem
@@ -71,6 +72,7 @@ from optimizers.runner import optimize
 from optimizers.store import RunStore
 from optimizers.synthetic import SYNTHETIC_PROBLEMS
 
+from . import protocol_cost
 from .common import (
     DEFAULT_OUT,
     STORE,
@@ -223,7 +225,17 @@ def main(config: Config) -> Path:
             write_csv(folder / f"{name}.csv", tables[key])
     stamp_study(folder, catenaries_of(config.problems))
     report(folder)
+    if config.archive is not None:
+        _write_cost(Path(config.archive), folder, config.envs)
     return folder
+
+
+def _write_cost(archive: Path, folder: Path, cores: int) -> None:
+    """``cost.md``: what the archive's finished runs cost (:mod:`experiments.protocol_cost`); each run
+    held ``cores`` cores (its envs, or as many GA workers)."""
+    if finished_runs(archive):
+        text = protocol_cost.report(archive, "The amortised RL study's cost", cores=cores)
+        (folder / "cost.md").write_text(text, encoding="utf-8")
 
 
 def _x_text(x: Any) -> str:

@@ -46,3 +46,16 @@ def test_the_cost_leaves_out_interruptions_cached_designs_and_untimed_run_times(
     assert "| all | 2 | 6 | 5 | 0.0 |" in text
     assert "| gp | stitched | 1 | 0.3 (0.3–0.3) | 1 | 0.3 (0.3–0.3) |" in text
     assert "| gp | benchmark | 1 | 0.1 (0.1–0.1) | 0 | – |" in text
+
+
+def test_a_run_on_two_cores_reports_its_wall_time_and_core_time(tmp_path):
+    """The amortised RL study's runs step two envs at once: the run time is wall time on two cores, twice
+    that in core-hours, beside the simulations' own (core) time."""
+    day = "2026-12-03T10:"
+    rows = [_row(i, day + f"{i:02d}:00+00:00", 100.0) for i in range(1, 37)]  # 36 min, 3600 s simulated
+    write_run_file(tmp_path, _run("ppo", "B1@abc", 0, day + "00:00+00:00"), rows)
+    text = protocol_cost.report(tmp_path, "The amortised RL study's cost", cores=2)
+    assert text.startswith("# The amortised RL study's cost")
+    assert "Each run held 2 cores" in text
+    assert "0.6 h on 2 cores (1.2 core-hours), against 1.0 core-hours of simulation" in text
+    assert "| ppo | benchmark | 1 | 60.0 (60.0–60.0) | 1 | 36.0 (36.0–36.0) |" in text

@@ -184,6 +184,9 @@ def test_the_study_resumes_from_its_run_archive_on_a_fresh_checkout(tmp_path, mo
         + len(config.learners) * config.policy_budget
     )
     assert len(calls) == made - runs
+    n_runs = len(config.speeds) + len(config.learners)  # what the archive's runs cost, written beside
+    cost = (first / "cost.md").read_text(encoding="utf-8")
+    assert f"| all | {n_runs} | {int(runs):,} | {int(runs):,} |" in cost
     assert (second / "steps.csv").read_text(encoding="utf-8") == (first / "steps.csv").read_text(
         encoding="utf-8"
     )
