@@ -172,9 +172,12 @@ def test_analytic_jacobian_matches_finite_differences(stitched_catenary):
         assert np.allclose(fd, J[:, column], rtol=1e-5, atol=1e-5 * np.max(np.abs(J)))
 
 
-def test_newton_evaluates_one_jacobian_per_iteration_and_one_residual_per_step(
-    benchmark_catenary, monkeypatch
-):
+def test_newton_factorises_a_jacobian_per_iteration_until_its_quadratic_phase(benchmark_catenary, monkeypatch):
+    """One residual per step; a Jacobian per iteration, but for the steps after two that each cut the residual
+    a hundredfold (a chord step reuses the last factorisation), which end at the same solution as Newton's
+    to round-off and at its floor."""
+    layout = build_layout(benchmark_catenary, level_design(benchmark_catenary), 5, 1.0, 2.0)
+    newton = find_shape(layout, chord=False)
     calls = {"residual": 0, "jacobian": 0}
     for name in calls:
         method = getattr(ShapeEquations, name)
@@ -184,10 +187,16 @@ def test_newton_evaluates_one_jacobian_per_iteration_and_one_residual_per_step(
             return method(self, y)
 
         monkeypatch.setattr(ShapeEquations, name, counted)
-    static = find_shape(build_layout(benchmark_catenary, level_design(benchmark_catenary), 5, 1.0, 2.0))
-    iterations = len(static.residual_history) - 1
+    static = find_shape(layout)
+    history = np.array(static.residual_history)
+    iterations = history.size - 1
+    quadratic = [i for i in range(2, iterations) if np.all(history[i - 1 : i + 1] < 1e-2 * history[i - 2 : i])]
+    assert quadratic, "no chord step here: the test shows nothing"
     # No step is cut back here: the initial residual plus one per step, and the final state is reused.
-    assert calls == {"residual": iterations + 1, "jacobian": iterations}
+    assert calls == {"residual": iterations + 1, "jacobian": iterations - len(quadratic)}
+    assert history[-1] < 1e-8 * static.load_scale
+    assert np.max(np.abs(static.positions - newton.positions)) < 1e-10  # m
+    assert np.allclose(static.bar_forces, newton.bar_forces, rtol=1e-9, atol=1e-9)
 
 
 def test_stiffness_is_higher_at_the_supports_than_at_mid_span(benchmark_static):
@@ -256,3 +265,25 @@ def test_wire_tensions_are_the_tension_along_the_slope(benchmark_static):
     ):
         t = tensions[wire][~near[lay.cable_wire == kind]]
         assert np.all(t >= definition.tension * (1 - 1e-6)) and np.all(t < definition.tension * 1.01)
+
+
+def test_designs_of_one_topology_share_the_planned_jacobian_and_solve_as_with_their_own(
+    benchmark_catenary, monkeypatch
+):
+    """The Jacobian's pattern and the solver's ordering are planned once per topology: another design of the
+    same section takes the plan again, and finds the same shape, bit for bit, as with a plan of its own; a
+    section of another length gets another plan."""
+    from catenary_env.statics import shape_finding
+
+    def layout(design, n_spans=5):
+        return build_layout(benchmark_catenary, design, n_spans, 1.0, 2.0)
+
+    level, presag = level_design(benchmark_catenary), presag_design(benchmark_catenary, 0.05)
+    first = ShapeEquations(layout(level))
+    again = ShapeEquations(layout(presag))
+    assert again._jacobian is first._jacobian and again._solver is first._solver
+    assert ShapeEquations(layout(level, 4))._solver is not first._solver
+    shared = find_shape(layout(presag))
+    monkeypatch.setattr(shape_finding, "_PLANS", shape_finding.RecentPlans())  # nothing planned yet
+    own = find_shape(layout(presag))
+    assert np.array_equal(shared.positions, own.positions) and np.array_equal(shared.lengths, own.lengths)

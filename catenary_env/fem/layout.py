@@ -129,6 +129,12 @@ class Layout:
         """Global indices of the 8 coordinates of each cable element; shape (Ec, 8)."""
         return self.cable_dof_table
 
+    def topology(self) -> tuple[np.ndarray, ...]:
+        """What the sparsity of the section's matrices follows from: its coordinates, its elements' nodes
+        and its stitch bars (the same for every design of a problem, whatever the heights)."""
+        n_dofs = np.array([self.n_dofs])
+        return (n_dofs, self.node_dof, self.cable_dof_table, self.bar_nodes, self.stitch_bars)
+
     def node_size(self, nodes: np.ndarray) -> np.ndarray:
         """Coordinates per node: 2 (stitch), 4 (wire), 6 (messenger hinge at a support)."""
         ends = np.r_[self.node_dof, self.n_dofs]

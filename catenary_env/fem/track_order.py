@@ -17,6 +17,8 @@ once: where each stored entry goes in the band (or in the permuted matrix).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
@@ -83,27 +85,50 @@ class TrackOrderSolver:
         numpy.linalg.LinAlgError
             When the matrix is singular.
         """
+        return self.factorize(matrix)(rhs)
+
+    def factorize(self, matrix: sp.csc_matrix) -> Callable[[np.ndarray], np.ndarray]:
+        """The factors of ``matrix``, as a function that solves ``matrix @ x = rhs`` for any ``rhs`` (the
+        same numbers as :meth:`solve`, which factorises and solves at once).
+
+        Raises
+        ------
+        ValueError
+            When the matrix does not have the planned pattern.
+        numpy.linalg.LinAlgError
+            When the matrix is singular.
+        """
         if not (
             matrix.format == "csc"
             and np.array_equal(matrix.indptr, self._indptr)
             and np.array_equal(matrix.indices, self._indices)
         ):
             raise ValueError("TrackOrderSolver.solve: the matrix does not have the planned sparsity pattern")
-        b = np.empty(self.n)
-        b[self._row_rank] = rhs
         if self.banded:
             flat = np.zeros(self._band_shape[0] * self.n)
             flat[self._band_index] = matrix.data
             band = flat.reshape(self._band_shape, order="F")
-            _, _, y, info = lapack.dgbsv(self.lower, self.upper, band, b, overwrite_ab=True, overwrite_b=True)
+            # gbsv is gbtrf then gbtrs: the factors kept, the same numbers.
+            lu, pivots, info = lapack.dgbtrf(band, self.lower, self.upper, overwrite_ab=True)
             if info > 0:
                 raise np.linalg.LinAlgError(f"singular matrix: zero pivot in column {info}")
+
+            def solve_permuted(b: np.ndarray) -> np.ndarray:
+                y, _ = lapack.dgbtrs(lu, self.lower, self.upper, b, pivots, overwrite_b=True)
+                return y
+
         else:
             permuted = sp.csc_matrix(
                 (matrix.data[self._order], self._permuted_indices, self._permuted_indptr), shape=matrix.shape
             )
             try:
-                y = spla.splu(permuted, permc_spec="NATURAL").solve(b)
+                solve_permuted = spla.splu(permuted, permc_spec="NATURAL").solve
             except RuntimeError as error:  # SuperLU: "Factor is exactly singular"
                 raise np.linalg.LinAlgError(f"singular matrix: {error}") from None
-        return y[self._col_rank]
+
+        def solve(rhs: np.ndarray) -> np.ndarray:
+            b = np.empty(self.n)
+            b[self._row_rank] = rhs
+            return solve_permuted(b)[self._col_rank]
+
+        return solve

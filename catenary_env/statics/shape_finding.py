@@ -22,13 +22,21 @@ The coupled system is solved by Newton–Raphson with the analytic tangent (asse
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 
 from ..errors import CatenaryError
-from ..fem.assembly import Assembled, SparseScatter, assemble, dlength_coordinates, matrix_coordinates
+from ..fem.assembly import (
+    Assembled,
+    RecentPlans,
+    SparseScatter,
+    assemble,
+    dlength_coordinates,
+    matrix_coordinates,
+)
 from ..fem.bar import bar_state
 from ..fem.layout import CONTACT, MESSENGER, STITCH, Layout
 from ..fem.track_order import TrackOrderSolver
@@ -225,42 +233,56 @@ def _stitch_equations(layout: Layout, X: np.ndarray, lengths: np.ndarray) -> tup
     return residual, np.c_[bs.stiffness[:, 2, :], bs.force_dlength[:, 2]]
 
 
+_PLANS = RecentPlans()
+"""The Jacobian's scatter and solver of the last few topologies (every design of a problem has one)."""
+
+
+def _plan(layout: Layout, system: _System) -> tuple[SparseScatter, TrackOrderSolver]:
+    """The Jacobian's sparsity pattern and the linear solver's ordering, which depend on the layout's
+    topology only: planned once for all Newton iterations, and all designs of a problem."""
+    n_free = system.free.size
+    n, n_c = layout.n_dofs, layout.cable_nodes.shape[0]
+    n_unknowns = n_free + n_c + layout.bar_nodes.shape[0]
+    # Equation (row) of each coordinate's equilibrium and unknown (column) of each coordinate;
+    # -1 where the equation is dropped or the coordinate prescribed.
+    equation = np.full(n, -1)
+    equation[system.rows] = np.arange(system.rows.size)
+    unknown = np.full(n, -1)
+    unknown[system.free] = np.arange(n_free)
+    stitch_bars = layout.stitch_bars[:, 0]
+    stitch_dofs = layout.bar_dofs()[stitch_bars]
+    # The Jacobian's entries: element tangents and length derivatives at their equation (row) and
+    # unknown (column), then the gradients of the stitch equations.
+    m_rows, m_cols = matrix_coordinates(layout)
+    d_rows, d_lengths = dlength_coordinates(layout)
+    stitch_rows = np.repeat(system.rows.size + np.arange(stitch_bars.size), 5)
+    stitch_cols = np.c_[unknown[stitch_dofs], n_free + n_c + stitch_bars].ravel()
+    rows = np.r_[equation[m_rows], equation[d_rows], stitch_rows]
+    cols = np.r_[unknown[m_cols], n_free + d_lengths, stitch_cols]
+    jacobian = SparseScatter(rows, cols, (n_unknowns, n_unknowns), "csc")
+    # Nodes are numbered along the track, so a coordinate's index is its track position; an element's
+    # length and a stitch wire's equation stand at the mean index of their coordinates.
+    solver = TrackOrderSolver(
+        jacobian.pattern,
+        np.r_[system.rows, stitch_dofs.mean(axis=1)],
+        np.r_[system.free, layout.cable_dofs().mean(axis=1), layout.bar_dofs().mean(axis=1)],
+    )
+    return jacobian, solver
+
+
 class ShapeEquations:
     """The shape-finding system R(y) = 0 over the unknowns y = (free coordinates, reference lengths).
 
-    The Jacobian's sparsity pattern and the linear solver's ordering depend on the layout only, so
-    they are planned once, here, for all Newton iterations.
+    The Jacobian's sparsity pattern and the linear solver's ordering depend on the layout's topology
+    only, so they are planned once (:func:`_plan`), for all Newton iterations and the designs of a problem.
     """
 
     def __init__(self, layout: Layout) -> None:
         self.layout = layout
         self.system = system = _system(layout)
         self.n_free = system.free.size
-        n, n_c = layout.n_dofs, layout.cable_nodes.shape[0]
-        n_unknowns = self.n_free + n_c + layout.bar_nodes.shape[0]
-        # Equation (row) of each coordinate's equilibrium and unknown (column) of each coordinate;
-        # -1 where the equation is dropped or the coordinate prescribed.
-        equation = np.full(n, -1)
-        equation[system.rows] = np.arange(system.rows.size)
-        unknown = np.full(n, -1)
-        unknown[system.free] = np.arange(self.n_free)
-        stitch_bars = layout.stitch_bars[:, 0]
-        stitch_dofs = layout.bar_dofs()[stitch_bars]
-        # The Jacobian's entries: element tangents and length derivatives at their equation (row) and
-        # unknown (column), then the gradients of the stitch equations.
-        m_rows, m_cols = matrix_coordinates(layout)
-        d_rows, d_lengths = dlength_coordinates(layout)
-        stitch_rows = np.repeat(system.rows.size + np.arange(stitch_bars.size), 5)
-        stitch_cols = np.c_[unknown[stitch_dofs], self.n_free + n_c + stitch_bars].ravel()
-        rows = np.r_[equation[m_rows], equation[d_rows], stitch_rows]
-        cols = np.r_[unknown[m_cols], self.n_free + d_lengths, stitch_cols]
-        self._jacobian = SparseScatter(rows, cols, (n_unknowns, n_unknowns), "csc")
-        # Nodes are numbered along the track, so a coordinate's index is its track position; an element's
-        # length and a stitch wire's equation stand at the mean index of their coordinates.
-        self._solver = TrackOrderSolver(
-            self._jacobian.pattern,
-            np.r_[system.rows, stitch_dofs.mean(axis=1)],
-            np.r_[system.free, layout.cable_dofs().mean(axis=1), layout.bar_dofs().mean(axis=1)],
+        self._jacobian, self._solver = _PLANS.get(
+            (*layout.topology(), system.rows, system.free), lambda: _plan(layout, system)
         )
 
     def unknowns(self, X: np.ndarray, lengths: np.ndarray) -> np.ndarray:
@@ -291,22 +313,29 @@ class ShapeEquations:
         """Residual (N) and, optionally, its analytic Jacobian with respect to y."""
         return self.residual(y)[0], self.jacobian(y) if jacobian else None
 
-    def solve(self, J: sp.csc_matrix, rhs: np.ndarray) -> np.ndarray:
-        """J⁻¹ rhs, by a direct solve in track order (:mod:`catenary_env.fem.track_order`).
+    def factorize(self, J: sp.csc_matrix) -> Callable[[np.ndarray], np.ndarray]:
+        """rhs ↦ J⁻¹ rhs, J factorised once by a direct method in track order
+        (:mod:`catenary_env.fem.track_order`).
 
         Raises
         ------
         numpy.linalg.LinAlgError
             When J is singular.
         """
-        return self._solver.solve(J, rhs)
+        return self._solver.factorize(J)
 
 
-def find_shape(layout: Layout, tolerance: float = 1e-8, max_iterations: int = 30) -> StaticSolution:
+def find_shape(
+    layout: Layout, tolerance: float = 1e-8, max_iterations: int = 30, chord: bool = True
+) -> StaticSolution:
     """Solve the shape-finding problem of ``layout`` by Newton–Raphson.
 
-    Each iteration evaluates the Jacobian once and the residual once per tried step; the residual
-    of the accepted step is the next iteration's.
+    Each iteration evaluates the residual once per tried step (the residual of the accepted step is
+    the next iteration's) and, but in Newton's quadratic phase, the Jacobian once: once each of the
+    last two steps has cut the residual a hundredfold, the Jacobian changes too little over the next
+    step to be worth a new factorisation, and the last one serves (a chord step; the presets then
+    converge with three factorisations instead of four, to the same round-off floor:
+    docs/performance.md, 'Speed').
 
     Parameters
     ----------
@@ -316,6 +345,9 @@ def find_shape(layout: Layout, tolerance: float = 1e-8, max_iterations: int = 30
         default, 1e-8, stops at the round-off floor (some 4e-9 of the tension on the presets, reached
         in four Newton steps) without a fifth step that would only confirm it (docs/performance.md,
         'Speed': 3 % of an evaluation, the forces moved by rounding only).
+    chord : bool
+        Reuse the last factorisation in Newton's quadratic phase (above); False: a Jacobian every
+        iteration.
 
     Raises
     ------
@@ -329,6 +361,7 @@ def find_shape(layout: Layout, tolerance: float = 1e-8, max_iterations: int = 30
     scale = max(c.contact_wire.tension, c.messenger_wire.tension)
     history: list[float] = []
     r, state = equations.residual(y)
+    solve = None  # the last factorised Jacobian
     converged = False
     for _ in range(max_iterations):
         norm = float(np.max(np.abs(r)))
@@ -339,8 +372,11 @@ def find_shape(layout: Layout, tolerance: float = 1e-8, max_iterations: int = 30
         if norm < tolerance * scale or stalled:
             converged = True
             break
+        quadratic = len(history) > 2 and history[-1] < 1e-2 * history[-2] and history[-2] < 1e-2 * history[-3]
         try:
-            step = equations.solve(equations.jacobian(y), -r)
+            if solve is None or not (chord and quadratic):
+                solve = equations.factorize(equations.jacobian(y))
+            step = solve(-r)
         except np.linalg.LinAlgError as error:
             raise ShapeFindingError(
                 f"shape-finding failed: singular tangent ({error}); residual {norm:.3e} N"
