@@ -76,15 +76,7 @@ class TrackOrderSolver:
             self._permuted_indptr = np.r_[0, np.cumsum(np.bincount(j, minlength=n))].astype(np.int32)
 
     def solve(self, matrix: sp.csc_matrix, rhs: np.ndarray) -> np.ndarray:
-        """x with ``matrix @ x = rhs``.
-
-        Raises
-        ------
-        ValueError
-            When the matrix does not have the planned pattern.
-        numpy.linalg.LinAlgError
-            When the matrix is singular.
-        """
+        """x with ``matrix @ x = rhs``, by :meth:`factorize` (and its errors)."""
         return self.factorize(matrix)(rhs)
 
     def factorize(self, matrix: sp.csc_matrix) -> Callable[[np.ndarray], np.ndarray]:
