@@ -267,18 +267,25 @@ def test_two_lanes_restoring_one_archive_into_one_store_write_each_run_once(tmp_
     _comparison(tmp_path / "a", archive=tmp_path / "archive")
     path = tmp_path / "b.sqlite"
     counts: list[int] = []
-    barrier = threading.Barrier(4)
+    errors: list[BaseException] = []
+    # A lane that fails must break the barrier for the others (a deadlock guard, not a time limit).
+    barrier = threading.Barrier(4, timeout=300)
 
     def lane() -> None:
-        with RunStore(path) as store:
-            barrier.wait()
-            counts.append(restore_runs(store, tmp_path / "archive"))
+        try:
+            with RunStore(path) as store:
+                barrier.wait()
+                counts.append(restore_runs(store, tmp_path / "archive"))
+        except BaseException as error:
+            errors.append(error)
+            barrier.abort()
 
     threads = [threading.Thread(target=lane) for _ in range(4)]
     for thread in threads:
         thread.start()
     for thread in threads:
         thread.join()
+    assert not errors, errors
     assert sum(counts) == 4
     with RunStore(path, read_only=True) as store:
         assert len(store.runs()) == 4

@@ -30,6 +30,10 @@ from ..fem.bar import bar_state, geometric_tangent
 from ..fem.layout import CONTACT, DROPPER
 from ..statics.shape_finding import StaticSolution
 
+LOCATE_TOLERANCE = 1e-10
+"""Newton's last step in the element coordinate ξ ∈ [0, 1] when a track position is located on the contact
+wire (some 5e-11 m on a 0.5 m element; the round-off floor is some 1e-12)."""
+
 
 @dataclass(frozen=True)
 class ContactWireGeometry:
@@ -68,10 +72,15 @@ class ContactWireGeometry:
         qx = self.q[e][:, [0, 2, 4, 6]]
         L = self.length[e]
         xi = (x - qx[:, 0]) / (qx[:, 2] - qx[:, 0])
-        for _ in range(8):  # Newton on x(ξ) = x; the map is nearly linear
-            xi -= (np.einsum("nk,nk->n", hermite(xi, L), qx) - x) / np.einsum(
+        # Newton on x(ξ) = x; the map is nearly linear, so one or two steps reach the round-off floor
+        # (some 1e-12 in ξ, the rounding of x ~ 1 km), where the steps stop.
+        for _ in range(8):
+            step = (np.einsum("nk,nk->n", hermite(xi, L), qx) - x) / np.einsum(
                 "nk,nk->n", hermite_dxi(xi, L), qx
             )
+            xi -= step
+            if np.max(np.abs(step), initial=0.0) < LOCATE_TOLERANCE:
+                break
         h = hermite(xi, L)
         height = np.einsum("nk,nk->n", h, self.q[e][:, [1, 3, 5, 7]])
         return e, h, height

@@ -282,10 +282,11 @@ class _Residuals:
             phi = modes.shapes[sel] / np.sqrt(c_k * modes.omega2 + c_m)
             rest = modes.truncated_shapes[sel] / np.sqrt(c_k * modes.truncated_omega2 + c_m)
             k = modes.far_modes
+            above_far = phi[:, k:] @ phi[:, k:].T  # the near modes' share, which a far span drops
             self.selected.append(sel)
-            self.modal.append(phi @ phi.T)
+            self.modal.append(phi[:, :k] @ phi[:, :k].T + above_far)
             self.near.append(rest @ rest.T)
-            self.far.append(self.near[-1] + phi[:, k:] @ phi[:, k:].T)
+            self.far.append(self.near[-1] + above_far)
         self.span_droppers = []
         for s in range(n_spans):
             sel = self.selected[reduced.span_type[s]]
