@@ -123,7 +123,9 @@ def report(archive: Path = ARCHIVE, title: str = "The full protocol's cost", cor
         )
     lines += [
         "",
-        f"Run time of the {len(timed)} runs with time stamps (the others were rebuilt from an export): "
+        f"Run time of the {len(timed)} runs with time stamps"
+        + (" (the others were rebuilt from an export)" if len(timed) < len(costs) else "")
+        + ": "
         + _hours(sum(c["run_time_s"] for c in timed), cores)
         + f", against {sum(c['simulation_time_s'] for c in timed) / 3600:.1f} core-hours of simulation. Per "
         "run, in minutes, median (least–most):",

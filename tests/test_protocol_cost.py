@@ -46,6 +46,7 @@ def test_the_cost_leaves_out_interruptions_cached_designs_and_untimed_run_times(
     assert "| all | 2 | 6 | 5 | 0.0 |" in text
     assert "| gp | stitched | 1 | 0.3 (0.3–0.3) | 1 | 0.3 (0.3–0.3) |" in text
     assert "| gp | benchmark | 1 | 0.1 (0.1–0.1) | 0 | – |" in text
+    assert "Run time of the 1 runs with time stamps (the others were rebuilt from an export)" in text
 
 
 def test_a_run_on_two_cores_reports_its_wall_time_and_core_time(tmp_path):
@@ -56,6 +57,6 @@ def test_a_run_on_two_cores_reports_its_wall_time_and_core_time(tmp_path):
     write_run_file(tmp_path, _run("ppo", "B1@abc", 0, day + "00:00+00:00"), rows)
     text = protocol_cost.report(tmp_path, "The amortised RL study's cost", cores=2)
     assert text.startswith("# The amortised RL study's cost")
-    assert "Each run held 2 cores" in text
+    assert "Each run held 2 cores" in text and "rebuilt from an export" not in text
     assert "0.6 h on 2 cores (1.2 core-hours), against 1.0 core-hours of simulation" in text
     assert "| ppo | benchmark | 1 | 60.0 (60.0–60.0) | 1 | 36.0 (36.0–36.0) |" in text
