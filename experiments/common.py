@@ -12,6 +12,7 @@ import argparse
 import csv
 import dataclasses
 import json
+import math
 import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -85,11 +86,19 @@ def write_json(path: Path, data: Any) -> None:
     tmp.replace(path)
 
 
-def markdown_table(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]]) -> str:
-    """A Markdown table: ``columns`` are (key, header, format)."""
+def markdown_table(
+    rows: list[dict[str, Any]], columns: list[tuple[str, str, str]], missing: str | None = None
+) -> str:
+    """A Markdown table: ``columns`` are (key, header, format); ``missing``, if given, stands for a NaN."""
+
+    def cell(value: Any, spec: str) -> str:
+        if missing is not None and isinstance(value, float) and math.isnan(value):
+            return missing
+        return format(value, spec)
+
     lines = ["| " + " | ".join(h for _, h, _ in columns) + " |", "|" + "---|" * len(columns)]
     for row in rows:
-        lines.append("| " + " | ".join(format(row[k], f) for k, _, f in columns) + " |")
+        lines.append("| " + " | ".join(cell(row[k], f) for k, _, f in columns) + " |")
     return "\n".join(lines)
 
 

@@ -15,6 +15,9 @@ measures what that costs and what it gives, on B1 and SW1 (quick: B1):
    simulations one policy cost (its training, plus one simulation per speed to know the σ of its design)
    against those of N GA runs, and the σ each gets; the break-even N at which the policy is the cheaper,
    for the gap to the GA optimum one accepts.
+4. *Where the designs went* (:func:`design_drift`): how far each policy's designs moved from the reference
+   towards the GA optima during training, how their spread narrowed, and how much of σ's variance the speed
+   explains (:func:`speed_share`): what a policy that stays far from the GA has been doing.
 
 Where the policies start: at the reference design (action 0) with the spread
 :data:`optimizers.rl.POLICY_SPREAD`, as in study 5 (:mod:`experiments.rl_studies`); SAC's warm-up draws
@@ -516,6 +519,17 @@ TABLE_COLUMNS = [
     ("gap_percent", "gap to GA (%)", "+.1f"),
     ("feasible", "feasible seeds", "s"),
 ]
+DRIFT_COLUMNS = [
+    ("problem", "problem", "s"),
+    ("learner", "learner", "s"),
+    ("seed", "seed", ".0f"),
+    ("to_ga_first_mm", "to the GA optima, first window (mm)", ".1f"),
+    ("to_ga_last_mm", "to the GA optima, last window (mm)", ".1f"),
+    ("covered_percent", "way covered (%)", ".0f"),
+    ("spread_first_mm", "spread, first window (mm)", ".1f"),
+    ("spread_last_mm", "spread, last window (mm)", ".1f"),
+    ("speed_share_percent", "σ's variance the speed explains, last window (%)", ".0f"),
+]
 LEDGER_COLUMNS = [
     ("problem", "problem", "s"),
     ("learner", "learner", "s"),
@@ -540,13 +554,20 @@ def report(folder: Path) -> str:
     sections = [
         (f"Learning curves (windows of {window} steps)", learning_summary(steps, window), LEARNING_COLUMNS),
         (
-            f"Policies against a GA run per speed ({_ga_budgets(ga_runs)})",
+            f"Policies against a GA run per speed ({_ga_budgets(ga_runs)}; –: no feasible design)",
             speed_table(designs),
             TABLE_COLUMNS,
         ),
+        (
+            f"Where the policies' designs went (mean design of the first and last {window} steps)",
+            design_drift(steps, designs, window),
+            DRIFT_COLUMNS,
+        ),
         ("Amortisation ledger", [r for r in ledger if r["n_speeds"] == LEDGER_SPEEDS[0]], LEDGER_COLUMNS),
     ]
-    text = "\n\n".join(f"### {title}\n\n{markdown_table(rows, columns)}" for title, rows, columns in sections)
+    text = "\n\n".join(
+        f"### {title}\n\n{markdown_table(rows, columns, missing='–')}" for title, rows, columns in sections
+    )
     (folder / "amortised.md").write_text(text + "\n", encoding="utf-8")
     _learning_figure(steps, window, folder / "learning_curves.png")
     _ledger_figure(ledger, curves, ga_runs, folder / "ledger.png")
@@ -584,6 +605,61 @@ def learning_summary(steps: list[dict[str, Any]], window: int) -> list[dict[str,
                 "last_reward": float(np.mean([r["reward"] for r in last])),
                 "first_feasible_percent": 100.0 * float(np.mean([r["feasible"] for r in first])),
                 "last_feasible_percent": 100.0 * float(np.mean([r["feasible"] for r in last])),
+            }
+        )  # fmt: skip
+    return out
+
+
+def _x(row: dict[str, Any]) -> np.ndarray:
+    """A row's design vector, m (``x_m``: the values apart; one value reads back as a float)."""
+    return np.array(str(row["x_m"]).split(), dtype=float)
+
+
+def speed_share(rows: list[dict[str, Any]]) -> float:
+    """The share of the variance of σ over ``rows`` (steps) that their speeds explain: 1 − the variance left
+    by a least-squares cubic in the speed over the variance of σ, over the feasible steps; NaN with fewer
+    than eight, or when σ does not vary."""
+    feasible = [r for r in rows if r["feasible"]]
+    sigma = np.array([r["sigma_N"] for r in feasible], dtype=float)
+    if sigma.size < 8 or np.ptp(sigma) == 0.0:
+        return math.nan
+    speed = np.array([r["speed_kmh"] for r in feasible], dtype=float)
+    basis = np.vander((speed - speed.mean()) / max(speed.std(), 1e-12), 4)
+    residual = sigma - basis @ np.linalg.lstsq(basis, sigma, rcond=None)[0]
+    return float(1.0 - residual.var() / sigma.var())
+
+
+def design_drift(
+    steps: list[dict[str, Any]], designs: list[dict[str, Any]], window: int
+) -> list[dict[str, Any]]:
+    """Where each policy's designs went during training: per problem, learner and seed, the mean design of
+    the first and the last ``window`` steps, its distance (Euclidean, over the design variables) to the mean
+    of the GA optima over the table's speeds, the share of that distance covered (the step from the first
+    mean to the last, projected on the direction to the GA optima), the spread (the RMS over the variables
+    of the designs' standard deviation) and the share of σ's variance the speed explains
+    (:func:`speed_share`) in the last window. Lengths in mm."""
+    optima = {
+        problem: np.mean([_x(r) for r in rows], axis=0)
+        for (problem,), rows in _groups([d for d in designs if d["design"] == "ga"], "problem").items()
+    }
+    out = []
+    for (problem, learner, seed), rows in _groups(steps, "problem", "learner", "seed").items():
+        rows.sort(key=lambda r: r["step"])
+        first, last = rows[:window], rows[-window:]
+        x_first, x_last = (np.array([_x(r) for r in part]) for part in (first, last))
+        start, end = x_first.mean(axis=0), x_last.mean(axis=0)
+        target = optima.get(problem, np.full(start.shape, math.nan))  # NaN: no GA optimum
+        to_go = target - start
+        covered = float((end - start) @ to_go / (to_go @ to_go)) if to_go.any() else math.nan
+        out.append(
+            {
+                "problem": problem, "learner": learner, "seed": seed,
+                "to_ga_first_mm": 1e3 * float(np.linalg.norm(to_go)),
+                "to_ga_last_mm": 1e3 * float(np.linalg.norm(target - end)),
+                "covered_percent": 100.0 * covered,
+                "spread_first_mm": 1e3 * float(np.sqrt(np.mean(x_first.var(axis=0)))),
+                "spread_last_mm": 1e3 * float(np.sqrt(np.mean(x_last.var(axis=0)))),
+                "speed_share_percent": 100.0 * speed_share(last),
             }
         )  # fmt: skip
     return out

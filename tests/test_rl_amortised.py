@@ -8,6 +8,7 @@ import math
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 pytest.importorskip("matplotlib", reason="the study's figures need matplotlib")
@@ -16,7 +17,7 @@ pytest.importorskip("stable_baselines3", reason="PPO and SAC come from stable-ba
 
 from catenary_env.problems.design_problem import DesignProblem  # noqa: E402
 from experiments import rl_amortised  # noqa: E402
-from experiments.common import read_csv  # noqa: E402
+from experiments.common import markdown_table, read_csv  # noqa: E402
 from optimizers import synthetic  # noqa: E402
 from optimizers.rl import load_policy  # noqa: E402
 
@@ -57,6 +58,7 @@ def _check_study(config: rl_amortised.Config, tmp_path: Path, monkeypatch: pytes
     assert all(r["n_simulations"] == config.ga_budget for r in ga)
     text = (folder / "amortised.md").read_text(encoding="utf-8")
     assert f"### Policies against a GA run per speed (GA: {config.ga_budget} simulations" in text
+    assert "### Where the policies' designs went" in text
     assert "### Amortisation ledger" in text
     for name in OUTPUTS:
         assert (folder / name).stat().st_size > 0
@@ -123,6 +125,56 @@ def test_the_ledger_charges_the_ga_what_it_needed_to_reach_the_policys_sigma():
     assert first["break_even_same_sigma"] == 13.0  # 13 x 40 = 520 >= 500 + 13
     totals = ("policy_simulations", "ga_simulations", "ga_simulations_to_policy_sigma")
     assert [tenth[k] for k in totals] == [510.0, 10000.0, 400.0]
+
+
+def test_the_speeds_share_of_sigma_is_all_of_it_for_a_cubic_and_none_for_noise():
+    rng = np.random.default_rng(0)
+    speeds = rng.uniform(200.0, 320.0, 400)
+    cubic = [
+        {"feasible": 1, "speed_kmh": v, "sigma_N": 20.0 + 1e-5 * (v - 200.0) ** 3 - 0.1 * v} for v in speeds
+    ]
+    assert rl_amortised.speed_share(cubic) == pytest.approx(1.0, abs=1e-12)
+    sigmas = rng.normal(30.0, 2.0, speeds.size)
+    noise = [{"feasible": 1, "speed_kmh": v, "sigma_N": s} for v, s in zip(speeds, sigmas, strict=True)]
+    assert rl_amortised.speed_share(noise) < 0.03  # four parameters fitted to 400 points of pure noise
+    infeasible = [{**row, "feasible": 0, "sigma_N": math.nan} for row in cubic[:395]]
+    assert math.isnan(rl_amortised.speed_share(infeasible + cubic[395:]))  # five feasible: too few to say
+
+
+def test_the_drift_measures_the_way_from_the_first_designs_to_the_ga_optima():
+    # The GA optima at two speeds average to (-10, -20) mm; a policy's designs move in a straight line from
+    # the reference, (0, 0), to half-way, (-5, -10) mm, in pairs 1 mm either side of the line's point.
+    designs = [
+        {"problem": "P", "design": "ga", "x_m": "-0.008 -0.02"},
+        {"problem": "P", "design": "ga", "x_m": "-0.012 -0.02"},
+        {"problem": "P", "design": "reference", "x_m": "0 0"},
+    ]
+    direction = np.array([-0.010, -0.020])
+    steps = []
+    for step in range(100):
+        x = 0.5 * (step // 2) / 49 * direction + (1e-3 if step % 2 else -1e-3)
+        steps.append(
+            {"problem": "P", "learner": "ppo", "seed": 0, "step": step, "speed_kmh": 200.0 + step,
+             "feasible": 1, "sigma_N": 30.0, "x_m": " ".join(f"{v:.9g}" for v in x)}
+        )  # fmt: skip
+    (row,) = rl_amortised.design_drift(steps[::-1], designs, window=10)  # any order of the steps
+    full = 1e3 * math.hypot(*direction)
+    first, last = 0.5 * 2 / 49, 0.5 * 47 / 49  # the windows' mean pairs: 0-4 and 45-49
+    assert row["to_ga_first_mm"] == pytest.approx((1.0 - first) * full)
+    assert row["to_ga_last_mm"] == pytest.approx((1.0 - last) * full)
+    assert row["covered_percent"] == pytest.approx(100.0 * (last - first) / (1.0 - first))
+    # a variable's variance over a window: 1 mm² from the pairs, and its pairs' points' spread along the line
+    variances = [1.0 + (0.5 * d / 49) ** 2 * np.var(range(5)) for d in 1e3 * direction]
+    assert row["spread_first_mm"] == pytest.approx(math.sqrt(np.mean(variances)))
+    assert row["spread_last_mm"] == pytest.approx(row["spread_first_mm"])
+    assert math.isnan(row["speed_share_percent"])  # σ does not vary
+
+
+def test_a_missing_value_reads_as_the_tables_word_for_it():
+    rows = [{"a": math.nan, "b": 1.0}]
+    table = markdown_table(rows, [("a", "A", ".2f"), ("b", "B", ".1f")])
+    assert table == "| A | B |\n|---|---|\n| nan | 1.0 |"
+    assert markdown_table(rows, [("a", "A", ".2f")], missing="–").endswith("| – |")
 
 
 def test_a_problem_whose_reference_is_not_action_0_is_refused():
