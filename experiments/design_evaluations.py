@@ -27,7 +27,7 @@ from catenary_env.problems.design_problem import DesignProblem
 from optimizers.base import EvaluationRecord
 from optimizers.catenary_adapter import catenary_problem
 from optimizers.evaluation import make_backend
-from optimizers.problem import GridSpace, Outcome, SimulateFunction
+from optimizers.problem import GridProblem, GridSpace, Outcome, SimulateFunction
 from optimizers.problem_registry import resolve_problem
 from optimizers.recorder import package_version
 from optimizers.store import RunConfig, RunStore
@@ -49,7 +49,7 @@ GIVEN_DESIGNS = "given-designs"
 
 def evaluate_designs(
     store: RunStore,
-    problem: str,
+    problem: str | GridProblem,
     requests: Sequence[tuple[Sequence[float], float]],
     fidelity: str,
     n_workers: int = 1,
@@ -60,9 +60,9 @@ def evaluate_designs(
     ----------
     store : RunStore
         Its cache is read; the new simulations are written to it.
-    problem : str
+    problem : str or GridProblem
         A catenary design problem (docs/problems.md, 'The eight problems') or a synthetic one
-        (``optimizers/synthetic.py``).
+        (``optimizers/synthetic.py``), or the problem itself (one at another contact-wire tension).
     requests : sequence of (x, speed_kmh)
         Designs (variables, m, on the grid) and the speed of each, km/h.
     fidelity : str
@@ -75,7 +75,7 @@ def evaluate_designs(
     list of Outcome
         In the order of ``requests``.
     """
-    resolved = resolve_problem(problem)
+    resolved = resolve_problem(problem) if isinstance(problem, str) else problem
     space = GridSpace.from_problem(resolved)
     outcomes: dict[int, Outcome] = {}
     missing: dict[tuple[tuple[int, ...], float], list[int]] = {}

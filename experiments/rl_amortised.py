@@ -53,6 +53,7 @@ import dataclasses
 import math
 import shlex
 import sys
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -60,8 +61,9 @@ from typing import Any
 import numpy as np
 
 from optimizers.archive import finished_runs, restore_runs
-from optimizers.base import OptimizationResult
+from optimizers.base import EvaluationRecord, OptimizationResult
 from optimizers.ga import POPULATION_SIZES, GAOptions
+from optimizers.problem import Outcome
 from optimizers.problem_registry import resolve_problem
 from optimizers.rl import (
     LEARNERS,
@@ -229,11 +231,11 @@ def main(config: Config) -> Path:
     stamp_study(folder, catenaries_of(config.problems))
     report(folder)
     if config.archive is not None:
-        _write_cost(Path(config.archive), folder, config.envs)
+        write_cost(Path(config.archive), folder, config.envs)
     return folder
 
 
-def _write_cost(archive: Path, folder: Path, cores: int) -> None:
+def write_cost(archive: Path, folder: Path, cores: int) -> None:
     """``cost.md``: what the archive's finished runs cost (:mod:`experiments.protocol_cost`); each run
     held ``cores`` cores (its envs, or as many GA workers)."""
     if finished_runs(archive):
@@ -241,12 +243,13 @@ def _write_cost(archive: Path, folder: Path, cores: int) -> None:
         (folder / "cost.md").write_text(text, encoding="utf-8")
 
 
-def _x_text(x: Any) -> str:
+def x_text(x: Any) -> str:
     return " ".join(f"{v:.6g}" for v in x)
 
 
-def _sigma(sigma: float | None, feasible: bool) -> float:
-    return float(sigma) if feasible and sigma is not None else float("nan")
+def sigma_or_nan(outcome: Outcome | EvaluationRecord) -> float:
+    """σ of a feasible outcome, N; NaN for an infeasible one (the tables' "–")."""
+    return float(outcome.sigma) if outcome.feasible and outcome.sigma is not None else float("nan")
 
 
 def _simulate(
@@ -266,7 +269,7 @@ def _simulate(
             {
                 "problem": problem, "design": design, "seed": seed, "speed_kmh": speed,
                 "held_out": int(held_out.get(speed, False)), "feasible": int(outcome.feasible),
-                "sigma_N": _sigma(outcome.sigma, outcome.feasible), "x_m": _x_text(x),
+                "sigma_N": sigma_or_nan(outcome), "x_m": x_text(x),
             }
         )  # fmt: skip
 
@@ -285,22 +288,27 @@ def _ga_runs(store: RunStore, config: Config, problem: str, tables: dict[str, li
             options=config.ga_options(problem), store=store, resume=True, start_if_none=True,
             n_workers=config.workers, quiet=not config.full, archive=config.archive,
         )  # fmt: skip
-        tables["ga"].append(
-            {
-                "problem": problem, "speed_kmh": speed, "budget": result.budget,
-                "population": config.ga_options(problem).population_size,
-                "n_simulations": result.n_simulations, "stop_reason": result.stop_reason,
-                "best_sigma_N": result.best_sigma if result.best_sigma is not None else float("nan"),
-                "x_m": _x_text(result.best_x) if result.best_x is not None else "",
-            }
-        )  # fmt: skip
-        tables["curves"].extend(_best_so_far(problem, speed, result))
+        tables["ga"].append(ga_row(problem, speed, config, result, problem))
+        tables["curves"].extend(best_so_far(problem, speed, result))
         if result.best_x is not None:
             optima.append(("ga", 0, speed, tuple(result.best_x)))
     _simulate(store, config, problem, optima, tables["designs"])
 
 
-def _best_so_far(problem: str, speed: float, result: OptimizationResult) -> list[dict[str, Any]]:
+def ga_row(
+    name: str, speed: float, config: Config, result: OptimizationResult, problem: str
+) -> dict[str, Any]:
+    """The row of ``ga_runs.csv`` of a GA run at a speed on the problem the table calls ``name``."""
+    return {
+        "problem": name, "speed_kmh": speed, "budget": result.budget,
+        "population": config.ga_options(problem).population_size,
+        "n_simulations": result.n_simulations, "stop_reason": result.stop_reason,
+        "best_sigma_N": result.best_sigma if result.best_sigma is not None else float("nan"),
+        "x_m": x_text(result.best_x) if result.best_x is not None else "",
+    }  # fmt: skip
+
+
+def best_so_far(problem: str, speed: float, result: OptimizationResult) -> list[dict[str, Any]]:
     """The GA's best σ after each simulation that improved it (the curve is a staircase)."""
     rows, best, simulations = [], math.inf, 0
     for record in result.history:
@@ -334,17 +342,7 @@ def _policy(
         spec, design_problem, config.policy_budget, seed, options=options, store=store, resume=True,
         start_if_none=True, quiet=not config.full, archive=config.archive,
     )  # fmt: skip
-    stored = store.evaluations(int(result.run_id or 0))
-    tables["steps"].extend(
-        {
-            "learner": learner, "problem": problem, "seed": seed, "step": record.index + 1,
-            "speed_kmh": record.speed_kmh, "feasible": int(record.feasible),
-            "sigma_N": _sigma(record.sigma, record.feasible),
-            "reward": stored[record.index].reward if record.index in stored else float("nan"),
-            "x_m": _x_text(record.x),
-        }
-        for record in result.history
-    )  # fmt: skip
+    tables["steps"].extend(step_rows(store, problem, learner, seed, result))
     path = folder / "policies" / f"{learner}-{problem}-seed{seed}.zip"
     command = reproduce_command(config, store_path, problem, learner, seed, path)
     save_policy(policy, path, design_problem, result, command)
@@ -358,26 +356,63 @@ def _policy(
     print(f"{learner} on {problem} seed {seed}: {best}", file=sys.stderr, flush=True)
 
 
+def step_rows(
+    store: RunStore, problem: str, learner: str, seed: int, result: OptimizationResult
+) -> list[dict[str, Any]]:
+    """The rows of ``steps.csv`` of a policy's training run: every step, its speed, σ, reward and design."""
+    stored = store.evaluations(int(result.run_id or 0))
+    return [
+        {
+            "learner": learner, "problem": problem, "seed": seed, "step": record.index + 1,
+            "speed_kmh": record.speed_kmh, "feasible": int(record.feasible), "sigma_N": sigma_or_nan(record),
+            "reward": stored[record.index].reward if record.index in stored else float("nan"),
+            "x_m": x_text(record.x),
+        }
+        for record in result.history
+    ]  # fmt: skip
+
+
+def trains_with_defaults(config: Config, learner: str) -> bool:
+    """Whether the study trains the learner with its defaults (the full setting), as ``catenary optimize``
+    does: its runs are then reproduced by that command."""
+    return config.learner_options(learner) == dataclasses.replace(LEARNERS[learner](), n_envs=config.envs)
+
+
+def optimize_command(
+    config: Config,
+    store: Path,
+    problem: str,
+    learner: str,
+    seed: int,
+    policy: Path,
+    env_words: Sequence[str] = (),
+) -> str:
+    """The ``catenary optimize`` command that reproduces (resumes from the store) one policy's run of the full
+    setting and saves it again; ``env_words``: options of the env beyond the speeds."""
+    bands = [f"{v:g}" for band in HELD_OUT for v in band]
+    return shlex.join(
+        [
+            "catenary", "optimize", problem, "--optimizer", learner, "--budget", str(config.policy_budget),
+            "--seed", str(seed), "--fidelity", config.fidelity, "--workers", str(config.envs),
+            "--speed-range", *(f"{v:g}" for v in SPEED_RANGE), "--held-out-speeds", *bands, *env_words,
+            "--store", str(store), "--resume-or-start", "--save-policy", str(policy),
+        ]
+    )  # fmt: skip
+
+
 def reproduce_command(
     config: Config, store: Path, problem: str, learner: str, seed: int, policy: Path
 ) -> str:
     """The command that reproduces (resumes from the store) one policy's run and saves it again: ``catenary
     optimize`` when the study trains with the learner's defaults (the full setting), else the study's own
     command restricted to that run."""
-    if config.learner_options(learner) == dataclasses.replace(LEARNERS[learner](), n_envs=config.envs):
-        bands = [f"{v:g}" for band in HELD_OUT for v in band]
-        words = [
-            "catenary", "optimize", problem, "--optimizer", learner, "--budget", str(config.policy_budget),
-            "--seed", str(seed), "--fidelity", config.fidelity, "--workers", str(config.envs),
-            "--speed-range", *(f"{v:g}" for v in SPEED_RANGE), "--held-out-speeds", *bands,
-            "--store", str(store), "--resume-or-start", "--save-policy", str(policy),
-        ]  # fmt: skip
-    else:
-        words = [
-            "catenary", "experiment", "rl-amortised", *(["--full"] if config.full else []),
-            "--problems", problem, "--learners", learner, "--seeds", str(seed), "--envs", str(config.envs),
-            "--store", str(store), "--out", str(config.out),
-        ]  # fmt: skip
+    if trains_with_defaults(config, learner):
+        return optimize_command(config, store, problem, learner, seed, policy)
+    words = [
+        "catenary", "experiment", "rl-amortised", *(["--full"] if config.full else []),
+        "--problems", problem, "--learners", learner, "--seeds", str(seed), "--envs", str(config.envs),
+        "--store", str(store), "--out", str(config.out),
+    ]  # fmt: skip
     return shlex.join(words)
 
 
@@ -453,6 +488,7 @@ def amortisation_ledger(
     ga_runs: list[dict[str, Any]],
     steps: list[dict[str, Any]],
     n_speeds: tuple[int, ...] = LEDGER_SPEEDS,
+    trained_on: Callable[[str], str] = str,
 ) -> list[dict[str, Any]]:
     """The amortisation ledger: for each problem, learner and number of speeds N, the simulations of one
     policy (its training, the mean over seeds, plus one per speed) against those of N GA runs, both at
@@ -466,13 +502,16 @@ def amortisation_ledger(
         The rows of ``designs.csv``, ``ga_curves.csv``, ``ga_runs.csv`` and ``steps.csv``.
     n_speeds : tuple of int
         The numbers of speeds of the rows.
+    trained_on : callable
+        The problem a policy was trained on (``steps.csv``'s) of a table's problem (default: itself; the
+        tension study's table names a problem at a tension, :mod:`experiments.rl_tension`).
     """
-    gaps = policy_gaps(designs)
+    gaps = [{**r, "trained_on": trained_on(r["problem"])} for r in policy_gaps(designs)]
     out = []
-    for (problem, learner), rows in _groups(gaps, "problem", "learner").items():
-        runs = [r for r in ga_runs if r["problem"] == problem]
+    for (problem, learner), rows in _groups(gaps, "trained_on", "learner").items():
+        runs = [r for r in ga_runs if trained_on(r["problem"]) == problem]
         ga_full = float(np.mean([r["n_simulations"] for r in runs]))
-        matched = [ga_simulations_to(curves, problem, r["speed_kmh"], r["policy_N"]) for r in rows]
+        matched = [ga_simulations_to(curves, r["problem"], r["speed_kmh"], r["policy_N"]) for r in rows]
         ga_match = float(np.mean([m if math.isfinite(m) else ga_full for m in matched]))
         per_seed = _groups([s for s in steps if s["problem"] == problem and s["learner"] == learner], "seed")
         training = float(np.mean([len(v) for v in per_seed.values()]))
@@ -548,13 +587,13 @@ def report(folder: Path) -> str:
     designs = read_csv(folder / "designs.csv")
     curves = read_csv(folder / "ga_curves.csv") if (folder / "ga_curves.csv").is_file() else []
     ga_runs = read_csv(folder / "ga_runs.csv")
-    window = _window(steps)
+    window = window_of(steps)
     ledger = amortisation_ledger(designs, curves, ga_runs, steps)
     write_csv(folder / "ledger.csv", ledger)
     sections = [
         (f"Learning curves (windows of {window} steps)", learning_summary(steps, window), LEARNING_COLUMNS),
         (
-            f"Policies against a GA run per speed ({_ga_budgets(ga_runs)}; –: no feasible design)",
+            f"Policies against a GA run per speed ({ga_budgets(ga_runs)}; –: no feasible design)",
             speed_table(designs),
             TABLE_COLUMNS,
         ),
@@ -569,12 +608,12 @@ def report(folder: Path) -> str:
         f"### {title}\n\n{markdown_table(rows, columns, missing='–')}" for title, rows, columns in sections
     )
     (folder / "amortised.md").write_text(text + "\n", encoding="utf-8")
-    _learning_figure(steps, window, folder / "learning_curves.png")
+    learning_figure(steps, window, folder / "learning_curves.png")
     _ledger_figure(ledger, curves, ga_runs, folder / "ledger.png")
     return text
 
 
-def _ga_budgets(ga_runs: list[dict[str, Any]]) -> str:
+def ga_budgets(ga_runs: list[dict[str, Any]]) -> str:
     """The GA runs' budgets and populations, in words."""
     budgets = sorted({(int(r["budget"]), int(r["population"])) for r in ga_runs})
     return "; ".join(f"GA: {b} simulations, population {p}" for b, p in budgets)
@@ -587,7 +626,7 @@ def _groups(rows: list[dict[str, Any]], *keys: str) -> dict[tuple[Any, ...], lis
     return out
 
 
-def _window(steps: list[dict[str, Any]]) -> int:
+def window_of(steps: list[dict[str, Any]]) -> int:
     """Steps per point of the curves: a fortieth of the shortest run, at least 4."""
     lengths = [len(v) for v in _groups(steps, "problem", "learner", "seed").values()]
     return max(4, min(lengths) // 40) if lengths else 4
@@ -690,7 +729,7 @@ def _curve(values: list[float], window: int) -> tuple[Any, Any]:
     return np.arange(window, len(values) + 1), smooth
 
 
-def _learning_figure(steps: list[dict[str, Any]], window: int, path: Path) -> None:
+def learning_figure(steps: list[dict[str, Any]], window: int, path: Path) -> None:
     from catenary_env.plots import pyplot
 
     plt = pyplot()
@@ -774,9 +813,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--problems", nargs="+", default=[], choices=CHOICES, metavar="NAME",
         help=f"the design problems, of {' '.join(CHOICES)} (default: B1 SW1; quick: B1)",
     )  # fmt: skip
+    add_training_arguments(parser, tuple(LEARNERS))
+
+
+def add_training_arguments(parser: argparse.ArgumentParser, learners: tuple[str, ...]) -> None:
+    """The options of the policies' training and the study's files, shared with :mod:`experiments.rl_tension`:
+    ``--learners`` (default ``learners``), ``--seeds``, ``--envs``, ``--workers``, ``--out``, ``--store``,
+    ``--archive``."""
     parser.add_argument(
-        "--learners", nargs="+", default=list(LEARNERS), choices=list(LEARNERS), metavar="NAME",
-        help=f"the RL learners, of {' '.join(LEARNERS)} (default: all)",
+        "--learners", nargs="+", default=list(learners), choices=list(LEARNERS), metavar="NAME",
+        help=f"the RL learners, of {' '.join(LEARNERS)} (default: {' '.join(learners)})",
     )  # fmt: skip
     parser.add_argument(
         "--seeds", nargs="+", type=int, default=[], metavar="S",

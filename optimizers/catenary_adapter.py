@@ -28,7 +28,12 @@ STATISTICS = tuple(ContactStatistics.__dataclass_fields__)
 
 
 def simulate_catenary_design(
-    problem_name: str, x: tuple[float, ...], speed_kmh: float, fidelity: str, train: Train = SINGLE
+    problem_name: str,
+    x: tuple[float, ...],
+    speed_kmh: float,
+    fidelity: str,
+    train: Train = SINGLE,
+    contact_wire_tension: float | None = None,
 ) -> Outcome:
     """Simulate a design of a registered catenary design problem: picklable, for worker processes.
 
@@ -44,8 +49,17 @@ def simulate_catenary_design(
         ``"study"`` or ``"test"``.
     train : Train
         Pantographs behind the leading one and the objective's: σ is :attr:`Evaluation.sigma`.
+    contact_wire_tension : float or None
+        The contact wire's tension, N (default the preset's).
     """
-    evaluation = evaluate_problem(problem_name, tuple(x), float(speed_kmh), fidelity, train=train)
+    evaluation = evaluate_problem(
+        problem_name,
+        tuple(x),
+        float(speed_kmh),
+        fidelity,
+        train=train,
+        contact_wire_tension=contact_wire_tension,
+    )
     statistics = evaluation.statistics
     sigma = None if evaluation.sigma is None else float(evaluation.sigma)
     constraints = tuple(float(v) for v in evaluation.constraints)
@@ -75,24 +89,36 @@ class CatenaryProblem:
     constraint_names: tuple[str, ...] = CONSTRAINTS
     statistic_names: tuple[str, ...] = STATISTICS
     train: Train = SINGLE
+    contact_wire_tension: float | None = None
 
     @property
     def simulate(self) -> SimulateFunction:
-        if self.train == SINGLE:
-            return functools.partial(simulate_catenary_design, self.name)
-        return functools.partial(simulate_catenary_design, self.name, train=self.train)
+        options: dict[str, object] = {} if self.train == SINGLE else {"train": self.train}
+        if self.contact_wire_tension is not None:
+            options["contact_wire_tension"] = self.contact_wire_tension
+        return functools.partial(simulate_catenary_design, self.name, **options)
+
+    def with_contact_wire_tension(self, contact_wire_tension: float | None) -> CatenaryProblem:
+        """The same problem with its contact wire at ``contact_wire_tension``, N (None: the preset's)."""
+        return catenary_problem(self.name, self.train, contact_wire_tension)
 
 
-def catenary_problem(name: str, train: Train = SINGLE) -> CatenaryProblem:
+def catenary_problem(
+    name: str, train: Train = SINGLE, contact_wire_tension: float | None = None
+) -> CatenaryProblem:
     """Adapt the design problem ``name`` of ``catenary_env.problems`` (e.g. ``"B1"``), with the ``train``'s
-    pantographs behind the leading one (its objective's σ; the stored results' key includes it).
+    pantographs behind the leading one (its objective's σ; the stored results' key includes it) and its
+    contact wire at ``contact_wire_tension``, N (default the preset's; the model's fingerprint, and so the
+    stored results' key, includes it).
 
     Raises
     ------
     KeyError
         No such problem (the message lists those available).
+    ValueError
+        A tension outside the range the problem allows (the message gives it).
     """
-    problem = get_problem(name)
+    problem = get_problem(name).with_contact_wire_tension(contact_wire_tension)
     # The problem module calls its names `variables`; the interface agreed in the issue says
     # `variable_names`: accept either, so that a rename there does not break the optimisers.
     names = getattr(problem, "variable_names", None) or problem.variables
@@ -106,4 +132,5 @@ def catenary_problem(name: str, train: Train = SINGLE) -> CatenaryProblem:
         if train == SINGLE
         else model_fingerprint(problem.store_fingerprint(), train),
         train=train,
+        contact_wire_tension=problem.contact_wire_tension,
     )

@@ -188,10 +188,15 @@ class RunRecorder:
         return None
 
     def persist(
-        self, record: EvaluationRecord, design_key: tuple[int, ...], reward: float | None = None
+        self,
+        record: EvaluationRecord,
+        design_key: tuple[int, ...],
+        reward: float | None = None,
+        problem: str | None = None,
     ) -> None:
-        """Commit a new evaluation to the store (never a replayed one)."""
-        problem, fidelity = self.config.problem, self.config.fidelity
+        """Commit a new evaluation to the store (never a replayed one); ``problem``: its problem's store key
+        where it is not the run's (a policy conditioned on the contact-wire tension: the tension's)."""
+        problem, fidelity = problem or self.config.problem, self.config.fidelity
         self.store.add_evaluation(self.run_id, problem, fidelity, design_key, record, self.source, reward)
         # The batch is appended to the history when it is complete; show each evaluation as it is done.
         self._done_in_batch += 1

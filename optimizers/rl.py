@@ -56,6 +56,7 @@ import math
 import os
 import tempfile
 import zipfile
+from collections.abc import Callable
 from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
@@ -120,6 +121,11 @@ class EnvSpec:
     excluded_speeds : tuple of (float, float)
         With ``speed_range``: bands of speeds, km/h, never drawn in training (held out, to evaluate the
         policy where it has not been trained; the env's ``excluded_speeds``).
+    contact_wire_tension_range : (float, float) or None
+        Lowest and highest contact-wire tension, N, drawn at each reset: a policy conditioned on the
+        tension as well (the env's ``contact_wire_tension_range``); None: the preset's tension.
+    excluded_tensions : tuple of (float, float)
+        With ``contact_wire_tension_range``: bands of tensions, N, never drawn in training.
     """
 
     env_id: str
@@ -127,28 +133,49 @@ class EnvSpec:
     speed_range: tuple[float, float] | None = None
     fidelity: str = "study"
     excluded_speeds: tuple[tuple[float, float], ...] = ()
+    contact_wire_tension_range: tuple[float, float] | None = None
+    excluded_tensions: tuple[tuple[float, float], ...] = ()
 
     def as_dict(self) -> dict[str, Any]:
         """The spec as JSON values, part of a run's identity and of its steps' key in the store; without
-        ``excluded_speeds`` when there are none, as before they existed, so that a store's earlier runs and
-        steps still match."""
+        the held-out bands and the tension range where there are none, as before they existed, so that a
+        store's earlier runs and steps still match."""
         data = dataclasses.asdict(self)
-        if not self.excluded_speeds:
-            del data["excluded_speeds"]
+        for name in ("excluded_speeds", "contact_wire_tension_range", "excluded_tensions"):
+            if not data[name]:
+                del data[name]
         return data
 
     def make(self) -> Any:
         """Build the env with ``gymnasium.make``."""
         import gymnasium
 
+        kwargs: dict[str, Any] = {"fidelity": self.fidelity}
         if self.speed_range is not None:
-            bands = (
-                {"excluded_speeds": tuple(map(tuple, self.excluded_speeds))} if self.excluded_speeds else {}
-            )
-            return gymnasium.make(
-                self.env_id, speed_range=tuple(self.speed_range), fidelity=self.fidelity, **bands
-            )
-        return gymnasium.make(self.env_id, speed_kmh=self.speed_kmh, fidelity=self.fidelity)
+            kwargs["speed_range"] = tuple(self.speed_range)
+            if self.excluded_speeds:
+                kwargs["excluded_speeds"] = tuple(map(tuple, self.excluded_speeds))
+        else:
+            kwargs["speed_kmh"] = self.speed_kmh
+        if self.contact_wire_tension_range is not None:
+            kwargs["contact_wire_tension_range"] = tuple(self.contact_wire_tension_range)
+            if self.excluded_tensions:
+                kwargs["excluded_tensions"] = tuple(map(tuple, self.excluded_tensions))
+        return gymnasium.make(self.env_id, **kwargs)
+
+    @property
+    def conditions(self) -> str:
+        """The speeds (and tensions) trained on, in words."""
+        if self.speed_range is None:
+            text = f"{self.speed_kmh:g} km/h"
+        else:
+            held_out = "".join(f" except {a:g}-{b:g}" for a, b in self.excluded_speeds)
+            text = f"{self.speed_range[0]:g}-{self.speed_range[1]:g} km/h{held_out}"
+        if self.contact_wire_tension_range is not None:
+            lo, hi = self.contact_wire_tension_range
+            held_out = "".join(f" except {a / 1000:g}-{b / 1000:g}" for a, b in self.excluded_tensions)
+            text += f", contact wire at {lo / 1000:g}-{hi / 1000:g} kN{held_out}"
+        return text
 
 
 POLICY_SPREAD = 0.2
@@ -377,21 +404,32 @@ def _recording_vec_env_class() -> type:
     class RecordingVecEnv(VecEnvWrapper):
         """Log every env step into the run (history, store), in order of the envs; serve from the store the
         steps a resumed run has stored and those an RL run on the same env (``env_key``: its EnvSpec as
-        JSON) made, at the same speed: their envs are not stepped, only reset, so that the speeds drawn
-        stay those of an uninterrupted run."""
+        JSON) made, at the same speed (and tension): their envs are not stepped, only reset, so that the
+        speeds drawn stay those of an uninterrupted run. ``problem_key(tension)``: the store key of the
+        problem at a contact-wire tension (N), for an env that draws the tension (None: the run's)."""
 
-        def __init__(self, venv: Any, recorder: RunRecorder, space: GridSpace, env_key: str) -> None:
+        def __init__(
+            self,
+            venv: Any,
+            recorder: RunRecorder,
+            space: GridSpace,
+            env_key: str,
+            problem_key: Callable[[float], str] | None = None,
+        ) -> None:
             super().__init__(venv)
             self.recorder, self.space, self.env_key = recorder, space, env_key
+            self.problem_key = problem_key
             self.workers = _Workers(venv)
             self._actions: NDArray[np.float32] | None = None
             self._observations: list[Any] = []
             self._speeds: list[float | None] = []
+            self._problems: list[str] = []
 
         def reset(self) -> Any:
             observations = self.venv.reset()
             self._observations = list(observations)
             self._speeds = [self._speed(info) for info in self.venv.reset_infos]
+            self._problems = [self._problem(info) for info in self.venv.reset_infos]
             return observations
 
         def step_async(self, actions: NDArray[np.float32]) -> None:
@@ -413,21 +451,27 @@ def _recording_vec_env_class() -> type:
                 observation, reward, info, reset_info = answer
                 if stored is None:
                     record = _record(base + i, x, reward, info, 0.0, self._speeds[i])
-                    self.recorder.persist(record, key, reward=reward)
+                    self.recorder.persist(record, key, reward=reward, problem=self._problems[i])
                 else:
                     record, reward, persist = stored
                     info = {"feasible": record.feasible, "reason": record.reason, "served": True}
                     if persist:
-                        self.recorder.persist(record, key, reward=reward)
+                        self.recorder.persist(record, key, reward=reward, problem=self._problems[i])
                 self.recorder.append(record)
                 rewards[i] = reward
                 info.update({"terminal_observation": self._observations[i], "TimeLimit.truncated": False})
                 infos.append(info)
                 self._observations[i], self._speeds[i] = observation, self._speed(reset_info)
+                self._problems[i] = self._problem(reset_info)
             return np.stack(self._observations), rewards, np.ones(self.num_envs, dtype=bool), infos
 
         def _speed(self, reset_info: dict[str, Any]) -> float | None:
             return _scalar(reset_info.get("speed_kmh"), self.recorder.config.speed_kmh)
+
+        def _problem(self, reset_info: dict[str, Any]) -> str:
+            if self.problem_key is None:
+                return self.recorder.config.problem
+            return self.problem_key(float(reset_info["contact_wire_tension"]))
 
         def _served(
             self, index: int, x: NDArray[np.float64], key: tuple[int, ...], env: int
@@ -442,7 +486,7 @@ def _recording_vec_env_class() -> type:
             hit = None  # an env that reports no speed breaks its contract: _record says so
             if speed is not None:
                 hit = self.recorder.store.lookup_env(
-                    config.problem, key, speed, config.fidelity, self.env_key
+                    self._problems[env], key, speed, config.fidelity, self.env_key
                 )
             if hit is None:
                 return None
@@ -552,7 +596,7 @@ def train_design_policy(
         run_id, resumed = stack.enter_context(open_run(run_store, config, resume, start_if_none))
         progress = ProgressDisplay(f"{name} on {space.name}", int(budget), "simulations", quiet=quiet)
         recorder = RunRecorder(run_store, run_id, config, space, "env", progress, resumed, archive)
-        vec_env = _vector_env(env_spec, recorder, space, settings)
+        vec_env = _vector_env(env_spec, recorder, space, settings, _problem_keys(env_spec, problem))
         stack.callback(vec_env.close)
         # One torch thread: these small networks gain nothing from more, and a fixed thread count keeps
         # torch's sums in one order whatever the core count, so that a resumed run replays its steps.
@@ -635,7 +679,31 @@ def _worker_env(env_spec: EnvSpec) -> Any:
     return env_spec.make()
 
 
-def _vector_env(env_spec: EnvSpec, recorder: RunRecorder, space: GridSpace, settings: LearnerOptions) -> Any:
+def _problem_keys(env_spec: EnvSpec, problem: GridProblem) -> Callable[[float], str] | None:
+    """The store key of the problem at a contact-wire tension (N), for an env that draws the tension (its
+    own model, so that its steps key as a run on that tension would); None for one that does not."""
+    if env_spec.contact_wire_tension_range is None:
+        return None
+    variant = getattr(problem, "with_contact_wire_tension", None)
+    if variant is None:
+        raise ValueError(
+            f"contact_wire_tension_range: the problem {problem.name!r} has no contact-wire tension to set"
+        )
+
+    @functools.lru_cache(maxsize=None)
+    def key(tension: float) -> str:
+        return GridSpace.from_problem(variant(tension)).store_key
+
+    return key
+
+
+def _vector_env(
+    env_spec: EnvSpec,
+    recorder: RunRecorder,
+    space: GridSpace,
+    settings: LearnerOptions,
+    problem_key: Callable[[float], str] | None = None,
+) -> Any:
     """The recorded envs in SB3's vector interface (one in this process, or ``n_envs`` worker processes),
     standardised as the options ask."""
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNormalize
@@ -645,7 +713,7 @@ def _vector_env(env_spec: EnvSpec, recorder: RunRecorder, space: GridSpace, sett
         inner = DummyVecEnv([env_spec.make])
     else:
         inner = SubprocVecEnv([functools.partial(_worker_env, env_spec)] * settings.n_envs)
-    vec_env = _recording_vec_env_class()(inner, recorder, space, env_key)
+    vec_env = _recording_vec_env_class()(inner, recorder, space, env_key, problem_key)
     if not (settings.normalize_observation or settings.normalize_reward):
         return vec_env
     # gamma = 0: an episode is one step, its return is its reward.
@@ -678,8 +746,11 @@ def _observation_scaling(vec_env: Any) -> ObservationScaling:
     )
 
 
-def design_for_speed(policy: DesignPolicy, problem: GridProblem, speed_kmh: float) -> NDArray[np.float64]:
-    """The design the policy gives for a speed: its deterministic action, mapped onto the grid.
+def design_for_speed(
+    policy: DesignPolicy, problem: GridProblem, speed_kmh: float, contact_wire_tension: float | None = None
+) -> NDArray[np.float64]:
+    """The design the policy gives for a speed (and a contact-wire tension): its deterministic action,
+    mapped onto the grid.
 
     Parameters
     ----------
@@ -689,15 +760,33 @@ def design_for_speed(policy: DesignPolicy, problem: GridProblem, speed_kmh: floa
         Its problem (bounds and grid).
     speed_kmh : float
         Train speed, km/h (within the training range for a meaningful answer).
+    contact_wire_tension : float, optional
+        The contact wire's tension, N, for a policy trained over a tension range (required there, refused
+        otherwise).
 
     Returns
     -------
     ndarray, shape (n_variables,)
         The design's variables, m, on the grid.
     """
+    conditioned = policy.env_spec.contact_wire_tension_range is not None
+    if conditioned != (contact_wire_tension is not None):
+        trained = policy.env_spec.conditions
+        raise ValueError(
+            f"contact_wire_tension = {contact_wire_tension!r}: "
+            + (
+                "give the tension, N: the policy was trained on "
+                if conditioned
+                else "the policy knows none: "
+            )
+            + trained
+        )
+    options = {"speed_kmh": float(speed_kmh)}
+    if contact_wire_tension is not None:
+        options["contact_wire_tension"] = float(contact_wire_tension)
     env = policy.env_spec.make()
     try:
-        observation, _ = env.reset(seed=0, options={"speed_kmh": float(speed_kmh)})
+        observation, _ = env.reset(seed=0, options=options)
     finally:
         env.close()
     if policy.observation_scaling is not None:
@@ -774,12 +863,8 @@ class PolicyRecord:
 
     @property
     def speeds(self) -> str:
-        """The speeds trained on, in words."""
-        spec = self.env_spec
-        if spec.speed_range is None:
-            return f"{spec.speed_kmh:g} km/h"
-        held_out = "".join(f" except {a:g}-{b:g}" for a, b in spec.excluded_speeds)
-        return f"{spec.speed_range[0]:g}-{spec.speed_range[1]:g} km/h{held_out}"
+        """The speeds (and contact-wire tensions) trained on, in words."""
+        return self.env_spec.conditions
 
 
 def learner_name_of_model(model: Any) -> str:
@@ -945,6 +1030,10 @@ def _policy_record(source: Path, text: bytes) -> tuple[PolicyRecord, Observation
             None if spec["speed_range"] is None else tuple(float(v) for v in spec["speed_range"]),
             str(spec["fidelity"]),
             tuple((float(a), float(b)) for a, b in spec.get("excluded_speeds", ())),
+            None
+            if spec.get("contact_wire_tension_range") is None
+            else tuple(float(v) for v in spec["contact_wire_tension_range"]),
+            tuple((float(a), float(b)) for a, b in spec.get("excluded_tensions", ())),
         )
         raw = data["observation_scaling"]
         scaling = None if raw is None else ObservationScaling(

@@ -129,3 +129,16 @@ def claimed_elsewhere():
             holder.communicate("")
 
     return hold
+
+
+def horizontal_tension(static: StaticSolution) -> np.ndarray:
+    """Horizontal component of the force each cable element carries, N (x-force at its far node)."""
+    from catenary_env.fem.ancf import cable_state
+
+    lay = static.layout
+    n_c = lay.cable_nodes.shape[0]
+    q = static.positions[lay.cable_dofs()]
+    state = cable_state(
+        q, static.lengths[:n_c], lay.cable_axial_stiffness, lay.cable_bending_stiffness, False
+    )
+    return state.force[:, 4]

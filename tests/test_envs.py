@@ -402,7 +402,7 @@ def test_excluded_speed_bands_are_never_drawn_but_can_be_set(fake_simulator: Fak
         (((190.0, 210.0),), r"within speed_range"),
         (((240.0, 230.0),), r"a <= b"),
         (((220.0, 240.0), (235.0, 250.0)), "overlap"),
-        (((200.0, 320.0),), "no whole km/h speed"),
+        (((200.0, 320.0),), r"no speed of \(200, 320\) km/h on the 1 km/h grid"),
     ],
 )
 def test_excluded_speed_bands_that_make_no_sense_are_refused(bands, match) -> None:

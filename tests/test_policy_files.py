@@ -200,6 +200,10 @@ def test_a_sac_policy_with_held_out_speeds_is_saved_with_its_record_and_command(
         (["--speed-range", "200", "320", "--held-out-speeds", "225"], "pairs of km/h"),
         (["--speed-range", "200", "320", "--held-out-speeds", "190", "235"], "within speed_range"),
         (["--speed-range", "200", "320", "--workers", "2"], "multiple"),
+        (["--contact-wire-tension", "20000"], "give --contact-wire-tension-range LO HI"),
+        (["--contact-wire-tension-range", "12000", "26000"], "must be within [15400, 28600] N"),
+        (["--contact-wire-tension-range", "20000", "28000", "--held-out-tensions", "21500"], "pairs of N"),
+        (["--held-out-tensions", "21500", "22500"], "with --contact-wire-tension-range"),
     ],
 )
 def test_bad_rl_options_end_in_one_line(tmp_path, capsys, options, says):

@@ -7,7 +7,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from conftest import SHORT
+from conftest import SHORT, horizontal_tension
 from scipy.optimize import brentq
 
 from catenary_env.analysis.static_analysis import stiffness_profile
@@ -25,25 +25,12 @@ def test_equilibrium_residual_is_below_1e_8_of_the_tension(name, request):
     assert static.residual_history[-2] < 1e-3 * static.residual_history[-4]
 
 
-def _horizontal_tension(static):
-    """Horizontal component of the force each cable element carries, N (x-force at its far node)."""
-    from catenary_env.fem.ancf import cable_state
-
-    lay = static.layout
-    n_c = lay.cable_nodes.shape[0]
-    q = static.positions[lay.cable_dofs()]
-    state = cable_state(
-        q, static.lengths[:n_c], lay.cable_axial_stiffness, lay.cable_bending_stiffness, False
-    )
-    return state.force[:, 4]
-
-
 @pytest.mark.parametrize("name", ["benchmark_static", "stitched_static"])
 def test_every_wire_element_carries_its_wire_tension(name, request):
     static = request.getfixturevalue(name)
     lay = static.layout
     c = lay.catenary
-    horizontal = _horizontal_tension(static)
+    horizontal = horizontal_tension(static)
     expected = np.where(lay.cable_wire == CONTACT, c.contact_wire.tension, c.messenger_wire.tension)
     if c.stitch_wire is not None:
         # Between its ends the stitch wire is tensioned against the messenger, which carries T - T_s there.

@@ -21,6 +21,7 @@ from ..model.definition import CatenaryDefinition
 from ..model.design import Design, check_speed, physical_warnings
 from ..pipeline import CONSTRAINTS, Evaluation, Fidelity, analysis_window, en50367_mean_force
 from ..problems import DesignProblem, get_problem, resolve_fidelity
+from ..problems.design_problem import TENSION_FRACTIONS
 from ..problems.speeds import SpeedsEvaluation, evaluate_over_speeds
 from ..problems.tolerance import RobustObjective
 from ..train import SINGLE, Train
@@ -41,7 +42,11 @@ design that keeps contact (the only feasible kind): its statistical minimum Fm -
 """
 
 MEMO_SIZE = 1024
-"""Evaluations an env keeps, keyed by design on its grid and speed: a repeated design is not re-simulated."""
+"""Evaluations an env keeps, keyed by design on its grid, speed and tension: a repeated design is not
+re-simulated."""
+
+TENSION_STEP = 100.0
+"""The grid of contact-wire tensions ``reset`` draws from a ``contact_wire_tension_range``, N."""
 
 _STATISTICS = tuple(ContactStatistics.__dataclass_fields__)
 
@@ -77,14 +82,17 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     A `ndarray` of shape `(2,)`, dtype float32: the speeds the design is for, as fractions of the
     contact wire's wave speed c = sqrt(T / ρA) (459.6 km/h on the benchmark catenary, 509.1 km/h on the
-    stitched one). This ratio governs the dynamics (a catenary is run at v / c ≤ 0.7). The observation
-    is constant within an episode; with `speed_range` it changes from episode to episode, so a policy
-    can be conditioned on the speed.
+    stitched one, at their presets' tensions). This ratio governs the dynamics (a catenary is run at
+    v / c ≤ 0.7). The observation is constant within an episode; with `speed_range` it changes from
+    episode to episode, so a policy can be conditioned on the speed. With `contact_wire_tension_range`
+    it has shape `(3,)`: the third entry is the episode's contact-wire tension over the preset's, and c
+    is the episode's.
 
     | Num | Observation                                        | Min | Max |
     |-----|----------------------------------------------------|-----|-----|
     | 0   | lowest speed of the objective / c                  | 0   | 1   |
     | 1   | highest speed of the objective / c                 | 0   | 1   |
+    | 2   | contact-wire tension / preset's (with a range)     | 0.7 | 1.3 |
 
     With `objective="sigma"` both entries are the episode's speed.
 
@@ -104,6 +112,9 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     `self.np_random`, uniformly on the whole km/h values in `[lo, hi]` (a 1 km/h grid, so that the
     pantograph calibration of each speed is reused) outside the `excluded_speeds` bands.
     `reset(options={"speed_kmh": v})` sets it, in an excluded band too (to evaluate a policy there).
+    With `contact_wire_tension_range=(lo, hi)` the contact wire's tension is drawn as well, after the
+    speed, on a 100 N grid outside the `excluded_tensions` bands; `reset(options={"contact_wire_tension":
+    t})` sets it. The reset's info gives `speed_kmh`, and `contact_wire_tension` (N) with a tension range.
 
     ## Episode End
 
@@ -115,9 +126,9 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     After `step`: `feasible` (bool), `reason` (str, empty when feasible), `variables` (dict of the
     variables on their grid, m), `design` (the full :class:`~catenary_env.model.design.Design`),
-    `speed_kmh`, `objective` (the σ value behind the reward, N, before normalisation; the penalty when
-    infeasible), every field of :class:`~catenary_env.analysis.statistics.ContactStatistics` (`mean`,
-    `std`, `std_over_mean`,
+    `speed_kmh`, `contact_wire_tension` (N), `objective` (the σ value behind the reward, N, before
+    normalisation; the penalty when infeasible), every field of
+    :class:`~catenary_env.analysis.statistics.ContactStatistics` (`mean`, `std`, `std_over_mean`,
     `statistical_max`, `statistical_min`, `actual_max`, `actual_min` in N, `contact_loss_percent` in %,
     `max_support_uplift` in m; absent when the design was not simulated dynamically),
     `acceptance` (the EN 50367 acceptance block, :class:`~catenary_env.analysis.acceptance.Acceptance`:
@@ -146,6 +157,13 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     - `excluded_speeds=()`: with `speed_range`, bands `((a, b), ...)` km/h, each within the range and
       apart from the others, whose speeds (a and b included) are never drawn: speeds held out of
       training. Refused if no whole km/h speed is left to draw.
+    - `contact_wire_tension=None`: the contact wire's tension, N, within 70–130 % of the preset's (default
+      the preset's; docs/problems.md, 'Contact-wire tension'). Every tension is simulated under the
+      preset's uplift force at the speed: the pantograph is set once per catenary, not per tension.
+    - `contact_wire_tension_range=None`: `(lo, hi)` N, drawn at each reset (not with
+      `contact_wire_tension`): a policy conditioned on the tension as well.
+    - `excluded_tensions=()`: with `contact_wire_tension_range`, bands `((a, b), ...)` N never drawn, as
+      `excluded_speeds` are for the speeds.
     - `n_spans=None`: spans in the section, overriding the fidelity's (the analysis section shrinks to
       `n_spans - 2` spans if needed).
     - `fidelity="study"`: `"study"` (20 spans, statistics on 10, Δt = 1 ms), `"test"` (5 spans, coarse
@@ -204,13 +222,25 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         buildability: str | BuildabilityLimits | None = None,
         robust: RobustObjective | None = None,
         train: Train = SINGLE,
+        contact_wire_tension: float | None = None,
+        contact_wire_tension_range: tuple[float, float] | None = None,
+        excluded_tensions: tuple[tuple[float, float], ...] = (),
     ) -> None:
         if vector_kwargs is not None and vector_kwargs != VECTOR_KWARGS:
             raise ValueError(
                 f"vector_kwargs = {vector_kwargs!r}: an option of gymnasium.make_vec, registered as "
                 f"{VECTOR_KWARGS!r}; a design env takes no other"
             )
-        self.problem: DesignProblem = _with_options(get_problem(problem), objective, buildability, robust)
+        base = _with_options(get_problem(problem), objective, buildability, robust)
+        self._tension_range = _tension_range(base, contact_wire_tension, contact_wire_tension_range)
+        self._tension_choices = _drawn_values(
+            self._tension_range, excluded_tensions, TENSION_STEP, "contact_wire_tension_range",
+            "excluded_tensions", "N", "tension",
+        )  # fmt: skip
+        first_tension = contact_wire_tension if self._tension_choices is None else self._tension_choices[0]
+        self.problem: DesignProblem = base.with_contact_wire_tension(first_tension)
+        """The problem of the episode: its catenary has the episode's contact-wire tension."""
+        self._preset_tension = get_problem(problem).catenary_definition.contact_wire.tension
         self.fidelity: Fidelity = resolve_fidelity(fidelity, n_spans)
         if not isinstance(train, Train):
             raise ValueError(f"train = {train!r}: a catenary_env.train.Train")
@@ -226,15 +256,20 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self.render_mode = render_mode
         self._speeds, self._speed_range = _speed_setting(
             self.problem.catenary_definition, speed_kmh, speed_range, objective, speeds_kmh
+        )  # the lowest tension's wave speed: a speed it allows, every tension drawn allows
+        self._speed_choices = _drawn_values(
+            self._speed_range, excluded_speeds, 1.0, "speed_range", "excluded_speeds", "km/h", "speed"
         )
-        self._speed_choices = _drawn_speeds(self._speed_range, excluded_speeds)
-        self._wave_speed_kmh = self.problem.catenary_definition.wave_speed * 3.6
         n = self.problem.n_variables
         self.action_space = spaces.Box(-1.0, 1.0, (n,), np.float32)
-        self.observation_space = spaces.Box(0.0, 1.0, (2,), np.float32)
+        if self._tension_range is None:
+            self.observation_space = spaces.Box(0.0, 1.0, (2,), np.float32)
+        else:
+            high = np.array([1.0, 1.0, TENSION_FRACTIONS[1]], dtype=np.float32)
+            self.observation_space = spaces.Box(np.zeros(3, np.float32), high, (3,), np.float32)
         self.evaluation_count = 0
         """Designs simulated by this env (memo hits, calibrations and reference runs not counted)."""
-        self._memo: OrderedDict[tuple[tuple[float, ...], float], Evaluation] = OrderedDict()
+        self._memo: OrderedDict[tuple[tuple[float, ...], float, float | None], Evaluation] = OrderedDict()
         self._reset_done = False
         self._last: tuple[Design, str, list[str]] | None = None
         self._last_trace: tuple[tuple[float, ...], tuple[float, ...]] = ((), ())
@@ -245,21 +280,38 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         super().reset(seed=seed)
-        if options and "speed_kmh" in options:
+        options = options or {}
+        speeds, problem = self._speeds, self.problem
+        if "speed_kmh" in options:
             if self.objective not in SINGLE_SPEED:
                 raise ValueError("options['speed_kmh'] is only for objective='sigma' or 'robust'")
-            speed = float(options["speed_kmh"])
-            _check_speed(self.problem.catenary_definition, speed)
-            self._speeds = (speed,)
+            speeds = (float(options["speed_kmh"]),)
         elif self._speed_choices is not None:
-            draw = self.np_random.integers(len(self._speed_choices))
-            self._speeds = (float(self._speed_choices[draw]),)
+            speeds = (float(self._speed_choices[self.np_random.integers(len(self._speed_choices))]),)
+        if "contact_wire_tension" in options:
+            if self._tension_range is None:
+                raise ValueError(
+                    "options['contact_wire_tension'] is only for an env with a contact_wire_tension_range"
+                )
+            problem = problem.with_contact_wire_tension(float(options["contact_wire_tension"]))
+        elif self._tension_choices is not None:  # after the speed: a speed-only env draws as it always did
+            tension = self._tension_choices[self.np_random.integers(len(self._tension_choices))]
+            problem = problem.with_contact_wire_tension(float(tension))
+        if options:  # drawn speeds and tensions were checked with the ranges
+            for v in speeds:
+                _check_speed(problem.catenary_definition, v)
+        self._speeds, self.problem = speeds, problem
         self._reset_done = True
-        return self._observation(), {"speed_kmh": self._speed_info()}
+        info: dict[str, Any] = {"speed_kmh": self._speed_info()}
+        if self._tension_range is not None:
+            info["contact_wire_tension"] = self._tension
+        return self._observation(), info
 
     def step(self, action: ArrayLike) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
-        if self._speed_range is not None and not self._reset_done:
-            raise gym.error.ResetNeeded("call reset() first: it draws the speed from speed_range")
+        if (self._speed_range is not None or self._tension_range is not None) and not self._reset_done:
+            raise gym.error.ResetNeeded(
+                "call reset() first: it draws the speed and the tension from their ranges"
+            )
         values = self.problem.grid.check_vector(action, "action")
         clipped = bool(np.any(values < -1.0) or np.any(values > 1.0))
         x = self.action_to_x(values)
@@ -269,7 +321,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             reward = -objective / self._reference_objective() if self.normalize_reward else -objective
         design = self.problem.design(x)
         info = self._info(x, design, result, objective, clipped)
-        self._last = (design, f"{self.problem.name} design at {self._speed_text()}", self._summary(info))
+        self._last = (design, f"{self.problem.name} design at {self._condition_text()}", self._summary(info))
         first = result.evaluations[0]
         self._last_trace = (first.trace_position, first.trace_force)
         return self._observation(), float(reward), True, False, info
@@ -306,13 +358,14 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         :meth:`~catenary_env.problems.DesignProblem.evaluate_speeds` (one statics for all of them)."""
         design_key = tuple(x.tolist())
         evaluations: list[Evaluation] = []
+        tension = self.problem.contact_wire_tension
         for i, speed in enumerate(self._speeds):
-            key = (design_key, speed)
+            key = (design_key, speed, tension)
             if key not in self._memo:
                 rest = self.problem.evaluate_speeds(x, self._speeds[i:], self.fidelity, train=self.train)
                 self.evaluation_count += len(rest.evaluations)
                 for v, evaluation in zip(self._speeds[i:], rest.evaluations, strict=False):
-                    self._memo[design_key, v] = evaluation
+                    self._memo[design_key, v, tension] = evaluation
                 while len(self._memo) > MEMO_SIZE:
                     self._memo.popitem(last=False)
                 evaluations.extend(rest.evaluations)
@@ -360,6 +413,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             "variables": dict(zip(self.problem.variables, x.tolist(), strict=True)),
             "design": design,
             "speed_kmh": self._speed_info(),
+            "contact_wire_tension": self._tension,
             "objective": objective,
         }
         stats = [e.statistics for e in evaluations]
@@ -396,14 +450,26 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         return lines
 
     def _observation(self) -> NDArray[np.float32]:
-        speeds = self._speeds
-        return np.array([min(speeds), max(speeds)], dtype=np.float32) / np.float32(self._wave_speed_kmh)
+        # In single precision throughout, as it always was: a stored policy run replays its actions.
+        wave_speed_kmh = np.float32(self.problem.catenary_definition.wave_speed * 3.6)
+        speeds = np.array([min(self._speeds), max(self._speeds)], dtype=np.float32) / wave_speed_kmh
+        if self._tension_range is None:
+            return speeds
+        return np.append(speeds, np.float32(self._tension / self._preset_tension))
+
+    @property
+    def _tension(self) -> float:
+        """The episode's contact-wire tension, N."""
+        return float(self.problem.catenary_definition.contact_wire.tension)
 
     def _speed_info(self) -> float | NDArray[np.float64]:
         return self._speeds[0] if len(self._speeds) == 1 else np.array(self._speeds)
 
-    def _speed_text(self) -> str:
-        return ", ".join(f"{v:g}" for v in self._speeds) + " km/h"
+    def _condition_text(self) -> str:
+        speeds = ", ".join(f"{v:g}" for v in self._speeds) + " km/h"
+        if self.problem.contact_wire_tension is None:
+            return speeds
+        return f"{speeds}, contact wire at {self._tension / 1000:g} kN"
 
 
 def _with_options(
@@ -472,37 +538,71 @@ def _speed_setting(
     return speeds, bounds
 
 
-def _drawn_speeds(
-    speed_range: tuple[float, float] | None, excluded: tuple[tuple[float, float], ...]
+def _drawn_values(
+    value_range: tuple[float, float] | None,
+    excluded: tuple[tuple[float, float], ...],
+    step: float,
+    range_field: str,
+    excluded_field: str,
+    unit: str,
+    what: str,
 ) -> NDArray[np.float64] | None:
-    """The whole km/h speeds ``reset`` draws from: those of the range outside the excluded bands (None
-    without a range); ValueError naming ``excluded_speeds`` for a band that is reversed, reaches outside
-    the range or overlaps another, or bands that leave no speed."""
+    """The values on a grid of ``step`` that ``reset`` draws from: those of the range outside the excluded
+    bands (None without a range); ValueError naming ``excluded_field`` for a band that is reversed, reaches
+    outside the range or overlaps another, or bands that leave no value."""
     bands = [(float(a), float(b)) for a, b in excluded]
-    if speed_range is None:
+    if value_range is None:
         if bands:
-            raise ValueError(f"excluded_speeds = {excluded!r}: only with speed_range, the speeds drawn from")
+            raise ValueError(
+                f"{excluded_field} = {excluded!r}: only with {range_field}, the values drawn from"
+            )
         return None
-    lo, hi = speed_range
+    lo, hi = value_range
     for a, b in bands:
         if not (lo <= a <= b <= hi):
             raise ValueError(
-                f"excluded_speeds: band ({a:g}, {b:g}) km/h must have a <= b within speed_range "
-                f"({lo:g}, {hi:g}) km/h"
+                f"{excluded_field}: band ({a:g}, {b:g}) {unit} must have a <= b within {range_field} "
+                f"({lo:g}, {hi:g}) {unit}"
             )
     for (a, b), (c, d) in zip(sorted(bands), sorted(bands)[1:], strict=False):
         if c <= b:
-            raise ValueError(f"excluded_speeds: bands ({a:g}, {b:g}) and ({c:g}, {d:g}) km/h overlap")
-    speeds = np.arange(math.ceil(lo), math.floor(hi) + 1, dtype=np.float64)
-    held_out = np.zeros(speeds.shape, dtype=bool)
+            raise ValueError(f"{excluded_field}: bands ({a:g}, {b:g}) and ({c:g}, {d:g}) {unit} overlap")
+    values = step * np.arange(math.ceil(lo / step), math.floor(hi / step) + 1, dtype=np.float64)
+    held_out = np.zeros(values.shape, dtype=bool)
     for a, b in bands:
-        held_out |= (speeds >= a) & (speeds <= b)
-    kept = speeds[~held_out]
+        held_out |= (values >= a) & (values <= b)
+    kept = values[~held_out]
     if kept.size == 0:
         raise ValueError(
-            f"excluded_speeds = {excluded!r}: no whole km/h speed of ({lo:g}, {hi:g}) km/h is left to draw"
+            f"{excluded_field} = {excluded!r}: no {what} of ({lo:g}, {hi:g}) {unit} on the {step:g} {unit} "
+            "grid is left to draw"
         )
     return kept
+
+
+def _tension_range(
+    problem: DesignProblem,
+    contact_wire_tension: float | None,
+    contact_wire_tension_range: tuple[float, float] | None,
+) -> tuple[float, float] | None:
+    """Check the tension arguments (ValueError naming the field and the allowed range); return the range."""
+    if contact_wire_tension_range is None:
+        problem.with_contact_wire_tension(contact_wire_tension)
+        return None
+    if contact_wire_tension is not None:
+        raise ValueError(
+            f"contact_wire_tension = {contact_wire_tension!r} and contact_wire_tension_range = "
+            f"{contact_wire_tension_range!r}: give one, the tension or the range drawn from at each reset"
+        )
+    lo, hi = (float(v) for v in contact_wire_tension_range)
+    if not (lo <= hi and math.floor(hi / TENSION_STEP) >= math.ceil(lo / TENSION_STEP)):
+        raise ValueError(
+            f"contact_wire_tension_range = {contact_wire_tension_range!r}: need lo <= hi with a value on the "
+            f"{TENSION_STEP:g} N grid between"
+        )
+    for tension in (lo, hi):
+        problem.with_contact_wire_tension(tension)
+    return lo, hi
 
 
 def _check_speed(catenary: CatenaryDefinition, speed_kmh: float) -> None:

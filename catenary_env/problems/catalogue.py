@@ -56,14 +56,17 @@ def evaluate_problem(
     fidelity: str | Fidelity,
     uplift_force: float | None = None,
     train: Train = SINGLE,
+    contact_wire_tension: float | None = None,
 ) -> Evaluation:
     """:meth:`DesignProblem.evaluate` of a registered problem, as a picklable function for process pools.
 
     Each worker process calibrates the uplift force once per catenary, speed and fidelity unless
     ``uplift_force`` (N) is given: pass :meth:`DesignProblem.uplift_force` from the parent to spare it.
-    ``train``: the pantographs behind the leading one and the objective's (default one pantograph).
+    ``train``: the pantographs behind the leading one and the objective's (default one pantograph);
+    ``contact_wire_tension``: N, the problem on its catenary with that tension (default the preset's).
     """
-    return get_problem(name).evaluate(x, speed_kmh, fidelity, uplift_force=uplift_force, train=train)
+    problem = get_problem(name).with_contact_wire_tension(contact_wire_tension)
+    return problem.evaluate(x, speed_kmh, fidelity, uplift_force=uplift_force, train=train)
 
 
 # -- the eight problems (docs/problems.md, 'The eight problems') ---------------------------------------

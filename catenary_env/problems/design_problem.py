@@ -38,7 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import pipeline
 from ..fingerprint import model_fingerprint
 from ..model.buildability import NO_LIMITS, BuildabilityLimits
-from ..model.definition import CatenaryDefinition, PantographDefinition
+from ..model.definition import CatenaryDefinition, DefinitionError, PantographDefinition
 from ..model.design import Design, DesignError, check_design, check_speed, presag_design, symmetric_design
 from ..model.tolerances import SectionDeviations, Tolerances
 from ..pipeline import (
@@ -52,11 +52,22 @@ from ..pipeline import (
 from ..train import SINGLE, Train
 from .best_known import BestKnown, best_known_table
 from .grid import DesignGrid
-from .reference import calibrated_uplift, preset_catenary, preset_pantograph, reference_evaluation
+from .reference import (
+    calibrated_uplift,
+    preset_catenary,
+    preset_pantograph,
+    problem_catenary,
+    reference_evaluation,
+)
 from .speeds import SpeedsEvaluation, evaluate_over_speeds
 from .tolerance import RobustObjective, ToleranceEvaluation, evaluate_under_tolerances, robust_evaluation
 
-__all__ = ["DesignProblem", "resolve_fidelity"]
+__all__ = ["TENSION_FRACTIONS", "DesignProblem", "resolve_fidelity"]
+
+TENSION_FRACTIONS = (0.7, 1.3)
+"""The contact-wire tensions a problem may be set to, as fractions of its preset's: a range around the
+preset, within which its other figures (the messenger's tension, the droppers, the supports) still make one
+catenary (docs/problems.md, 'Contact-wire tension')."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -92,6 +103,10 @@ class DesignProblem:
     robust : RobustObjective or None
         With it, :meth:`evaluate` returns the robust objective's evaluation: σ over seeded tolerance draws
         (:func:`~catenary_env.problems.tolerance.robust_evaluation`); None: the design as drawn.
+    contact_wire_tension : float or None
+        The contact wire's tension, N, within :data:`TENSION_FRACTIONS` of the preset's; None: the preset's
+        (docs/problems.md, 'Contact-wire tension'). ``problem.with_contact_wire_tension(t)`` sets it. The
+        designs are simulated under the preset's uplift force (:meth:`uplift_force`).
     """
 
     name: str
@@ -106,6 +121,7 @@ class DesignProblem:
     grid: DesignGrid = field(init=False, repr=False)
     buildability: BuildabilityLimits = NO_LIMITS
     robust: RobustObjective | None = None
+    contact_wire_tension: float | None = None
 
     def __post_init__(self) -> None:
         n = len(self.variables)
@@ -126,6 +142,18 @@ class DesignProblem:
             )
         if heights and len(heights) != self.n_droppers // 2 + mid:
             raise ValueError(f"problem {self.name!r}: needs {self.n_droppers // 2 + mid} heights")
+        if self.contact_wire_tension is not None:
+            self._check_tension(self.contact_wire_tension)
+
+    def _check_tension(self, tension: float) -> None:
+        preset = preset_catenary(self.catenary).contact_wire.tension
+        lo, hi = (f * preset for f in TENSION_FRACTIONS)
+        if not lo <= tension <= hi:  # NaN too
+            raise DefinitionError(
+                f"contact_wire_tension = {tension!r} N: must be within [{lo:g}, {hi:g}] N, "
+                f"{TENSION_FRACTIONS[0]:.0%} to {TENSION_FRACTIONS[1]:.0%} of the {self.catenary} "
+                f"catenary's {preset:g} N"
+            )
 
     # -- data -------------------------------------------------------------------------------------------
 
@@ -140,8 +168,8 @@ class DesignProblem:
 
     @property
     def catenary_definition(self) -> CatenaryDefinition:
-        """The catenary preset (loaded once per process)."""
-        return preset_catenary(self.catenary)
+        """The catenary preset (loaded once per process), with :attr:`contact_wire_tension` where set."""
+        return problem_catenary(self.catenary, self.contact_wire_tension)
 
     @property
     def pantograph_definition(self) -> PantographDefinition:
@@ -260,7 +288,9 @@ class DesignProblem:
         Calibrated so that the reference design's mean contact force equals the EN 50367 target at
         ``speed_kmh`` (a few passages: some 15 s at the study fidelity, announced on stderr); kept per
         model fingerprint (catenary and pantograph data), speed and fidelity in this process and on disk
-        (:mod:`~catenary_env.calibration_cache`), so later processes and commands reuse it.
+        (:mod:`~catenary_env.calibration_cache`), so later processes and commands reuse it. With
+        :attr:`contact_wire_tension` set, the preset's force: the pantograph is set once per catenary and
+        speed, not per tension (docs/problems.md, 'Contact-wire tension').
         """
         return calibrated_uplift(
             self.catenary, self.reference_design(), float(speed_kmh), resolve_fidelity(fidelity)
@@ -292,6 +322,12 @@ class DesignProblem:
             robust=self.robust if robust is None else robust,
         )
 
+    def with_contact_wire_tension(self, contact_wire_tension: float | None) -> DesignProblem:
+        """The same problem on its catenary with the contact wire at ``contact_wire_tension``, N (None: the
+        preset's); ValueError naming the allowed range outside :data:`TENSION_FRACTIONS` of the preset's."""
+        tension = None if contact_wire_tension is None else float(contact_wire_tension)
+        return dataclasses.replace(self, contact_wire_tension=tension)
+
     @property
     def best_known(self) -> BestKnown | None:
         """The best-known design of this problem (:mod:`~catenary_env.problems.best_known`), or None where
@@ -311,7 +347,12 @@ class DesignProblem:
         """The reference design's evaluation at a speed (cached in this process), with the ``train``'s
         pantographs behind the leading one."""
         return reference_evaluation(
-            self.catenary, self.reference_design(), float(speed_kmh), resolve_fidelity(fidelity), train
+            self.catenary,
+            self.reference_design(),
+            float(speed_kmh),
+            resolve_fidelity(fidelity),
+            train,
+            self.contact_wire_tension,
         )
 
     def evaluate(

@@ -9,6 +9,7 @@ pantograph data), speed and fidelity and kept on disk for every later process an
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 
 from .. import pipeline
@@ -22,6 +23,7 @@ from ..train import SINGLE, Train
 __all__ = [
     "calibrated_uplift",
     "clear_caches",
+    "problem_catenary",
     "preset_catenary",
     "preset_pantograph",
     "reference_evaluation",
@@ -37,6 +39,17 @@ def clear_caches() -> None:
 @functools.lru_cache(maxsize=None)
 def preset_catenary(name: str) -> CatenaryDefinition:
     return load_catenary(name)
+
+
+@functools.lru_cache(maxsize=64)
+def problem_catenary(name: str, contact_wire_tension: float | None = None) -> CatenaryDefinition:
+    """The catenary preset ``name``, with its contact wire's tension set to ``contact_wire_tension`` (N)
+    where given (docs/problems.md, 'Contact-wire tension'); checked as the data files are."""
+    catenary = preset_catenary(name)
+    if contact_wire_tension is None:
+        return catenary
+    wire = dataclasses.replace(catenary.contact_wire, tension=float(contact_wire_tension))
+    return dataclasses.replace(catenary, contact_wire=wire)
 
 
 @functools.lru_cache(maxsize=None)
@@ -63,10 +76,17 @@ def calibrated_uplift(catenary_name: str, reference: Design, speed_kmh: float, f
 
 @functools.lru_cache(maxsize=256)
 def reference_evaluation(
-    catenary_name: str, reference: Design, speed_kmh: float, fidelity: Fidelity, train: Train = SINGLE
+    catenary_name: str,
+    reference: Design,
+    speed_kmh: float,
+    fidelity: Fidelity,
+    train: Train = SINGLE,
+    contact_wire_tension: float | None = None,
 ) -> Evaluation:
-    """The reference design's evaluation, with the ``train``'s pantographs behind the calibrated one."""
-    catenary = preset_catenary(catenary_name)
+    """The reference design's evaluation, with the ``train``'s pantographs behind the calibrated one; on the
+    preset with its contact wire at ``contact_wire_tension`` (N) where given, under the preset's uplift
+    force (the pantograph is set once per catenary preset and speed, not per tension)."""
+    catenary = problem_catenary(catenary_name, contact_wire_tension)
     force = calibrated_uplift(catenary_name, reference, speed_kmh, fidelity)
     return pipeline.evaluate(
         catenary,

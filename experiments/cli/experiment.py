@@ -37,6 +37,9 @@ STUDIES = {
     "rl-amortised": Study(
         "rl_amortised", "speed-conditioned PPO and SAC policies at held-out speeds against a GA run per speed"
     ),
+    "rl-tension": Study(
+        "rl_tension", "SAC policies conditioned on speed and contact-wire tension, against a GA run each"
+    ),
     "tolerance": Study(
         "tolerance",
         "σ under installation tolerances, the design studies under buildability limits, robust GA",

@@ -109,6 +109,32 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "out, to evaluate the policy there), e.g. 225 235 285 295",
     )
     parser.add_argument(
+        "--contact-wire-tension",
+        type=float,
+        default=None,
+        metavar="N",
+        help="the catenary design problems: their catenary with the contact wire at this tension, N, within "
+        "70-130 %% of the preset's (default: the preset's); ppo and sac take --contact-wire-tension-range",
+    )
+    parser.add_argument(
+        "--contact-wire-tension-range",
+        type=float,
+        nargs=2,
+        default=None,
+        metavar=("LO", "HI"),
+        help="ppo and sac only: train a policy conditioned on the contact wire's tension as well, drawn per "
+        "episode from LO..HI N (within 70-130 %% of the preset's)",
+    )
+    parser.add_argument(
+        "--held-out-tensions",
+        type=float,
+        nargs="+",
+        default=[],
+        metavar="N",
+        help="with --contact-wire-tension-range: pairs A B of N bounding bands of tensions never drawn in "
+        "training, e.g. 21500 22500",
+    )
+    parser.add_argument(
         "--save-policy",
         default=None,
         metavar="FILE",
@@ -281,24 +307,33 @@ def _run_optimizer(args: argparse.Namespace, store: RunStore | str) -> Optimizat
 
 
 def _problem(args: argparse.Namespace) -> Any:
-    """The problem's name, or with ``--pantographs`` the catenary problem with its train (docs/model.md,
-    'Several pantographs')."""
-    if not args.pantographs:
+    """The problem's name, or the catenary problem with ``--pantographs``' train (docs/model.md, 'Several
+    pantographs') and at ``--contact-wire-tension`` (docs/problems.md, 'Contact-wire tension')."""
+    if args.contact_wire_tension_range is not None or args.held_out_tensions:
+        raise UsageError(
+            f"--contact-wire-tension-range/--held-out-tensions: ppo and sac only, not {args.optimizer}; "
+            "give --contact-wire-tension"
+        )
+    if not args.pantographs and args.contact_wire_tension is None:
         return args.problem
     from catenary_env.problems import get_problem
+    from catenary_env.train import SINGLE
 
     from ..catenary_adapter import catenary_problem
 
+    option = "--pantographs" if args.pantographs else "--contact-wire-tension"
     try:
         leading = get_problem(args.problem).pantograph_definition
     except KeyError:
-        raise UsageError(f"--pantographs: for the catenary design problems, not {args.problem!r}") from None
-    first, train = train_of(args, leading)
-    if first != leading:
-        raise UsageError(
-            f"--pantographs {args.pantographs}: the leading pantograph is the problem's, {leading.name}"
-        )
-    return catenary_problem(args.problem, train)
+        raise UsageError(f"{option}: for the catenary design problems, not {args.problem!r}") from None
+    train = SINGLE
+    if args.pantographs:
+        first, train = train_of(args, leading)
+        if first != leading:
+            raise UsageError(
+                f"--pantographs {args.pantographs}: the leading pantograph is the problem's, {leading.name}"
+            )
+    return catenary_problem(args.problem, train, args.contact_wire_tension)
 
 
 def _run_rl(args: argparse.Namespace, store: RunStore | str) -> tuple[OptimizationResult, Path | None]:
@@ -316,6 +351,11 @@ def _run_rl(args: argparse.Namespace, store: RunStore | str) -> tuple[Optimizati
             f"{args.optimizer} needs the design envs: pip install catenary-env[gym] ({error})"
         ) from error
     register_envs()
+    if args.contact_wire_tension is not None:
+        raise UsageError(
+            f"--contact-wire-tension is not for --optimizer {args.optimizer}: give "
+            "--contact-wire-tension-range LO HI, the tensions a policy is trained on"
+        )
     problem = catenary_problem(args.problem)
     spec = rl_env_spec(problem.name, args)
     n_envs = args.workers or 1
@@ -338,23 +378,41 @@ def _run_rl(args: argparse.Namespace, store: RunStore | str) -> tuple[Optimizati
 
 
 def rl_env_spec(problem: str, args: argparse.Namespace) -> Any:
-    """The env of an RL run from its options (``--speed`` or ``--speed-range``, ``--held-out-speeds``)."""
+    """The env of an RL run from its options (``--speed`` or ``--speed-range``, ``--held-out-speeds``,
+    ``--contact-wire-tension-range``, ``--held-out-tensions``)."""
     from ..rl import EnvSpec
 
-    bands = list(args.held_out_speeds)
-    if bands and (args.speed_range is None or len(bands) % 2):
-        raise UsageError(
-            f"--held-out-speeds {' '.join(f'{v:g}' for v in bands)}: pairs of km/h A B, with --speed-range"
-        )
-    pairs = tuple((bands[i], bands[i + 1]) for i in range(0, len(bands), 2))
+    speed_bands = _bands(args.held_out_speeds, args.speed_range, "--held-out-speeds", "km/h", "--speed-range")
+    tension_bands = _bands(
+        args.held_out_tensions, args.contact_wire_tension_range, "--held-out-tensions", "N",
+        "--contact-wire-tension-range",
+    )  # fmt: skip
     speed_range = tuple(args.speed_range) if args.speed_range is not None else None
+    tension_range = (
+        None if args.contact_wire_tension_range is None else tuple(args.contact_wire_tension_range)
+    )
     env_id = f"Catenary-{problem}-v0"
     try:
-        spec = EnvSpec(env_id, None if speed_range else args.speed, speed_range, args.fidelity, pairs)
-        spec.make().close()  # refuses bad speeds and bands, naming them, before any training
+        spec = EnvSpec(
+            env_id, None if speed_range else args.speed, speed_range, args.fidelity, speed_bands,
+            tension_range, tension_bands,
+        )  # fmt: skip
+        spec.make().close()  # refuses bad speeds, tensions and bands, naming them, before any training
     except ValueError as error:
-        raise UsageError(f"--speed-range/--held-out-speeds: {error}") from None
+        raise UsageError(
+            f"--speed-range/--held-out-speeds/--contact-wire-tension-range/--held-out-tensions: {error}"
+        ) from None
     return spec
+
+
+def _bands(values: list[float], value_range: Any, option: str, unit: str, range_option: str) -> tuple:
+    """The held-out bands ``((a, b), ...)`` of an option's pairs of values; a UsageError for an odd count or
+    bands without their range."""
+    if values and (value_range is None or len(values) % 2):
+        raise UsageError(
+            f"{option} {' '.join(f'{v:g}' for v in values)}: pairs of {unit} A B, with {range_option}"
+        )
+    return tuple((values[i], values[i + 1]) for i in range(0, len(values), 2))
 
 
 def rl_command(args: argparse.Namespace, policy: str | os.PathLike[str]) -> str:
@@ -369,6 +427,10 @@ def rl_command(args: argparse.Namespace, policy: str | os.PathLike[str]) -> str:
             words += ["--held-out-speeds", *(f"{v:g}" for v in args.held_out_speeds)]
     else:
         words += ["--speed", f"{args.speed:g}"]
+    if args.contact_wire_tension_range is not None:
+        words += ["--contact-wire-tension-range", *(f"{v:g}" for v in args.contact_wire_tension_range)]
+        if args.held_out_tensions:
+            words += ["--held-out-tensions", *(f"{v:g}" for v in args.held_out_tensions)]
     words += ["--store", str(args.store), "--resume-or-start", "--save-policy", str(policy)]
     return shlex.join(words)
 

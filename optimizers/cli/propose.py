@@ -1,6 +1,7 @@
 """``catenary propose POLICY --speed KMH``: the designs of a saved design policy (PPO or SAC), and their σ.
 
-    catenary propose POLICY --speed KMH [KMH ...] [--no-evaluate] [--fidelity study|test] [--json]
+    catenary propose POLICY --speed KMH [KMH ...] [--contact-wire-tension N] [--no-evaluate]
+                     [--fidelity study|test] [--json]
 
 A policy file is a zip archive written by ``catenary optimize PROBLEM --optimizer ppo`` (or ``sac``): the
 stable-baselines3 model (``data``, ``policy.pth``, ...) and the project's record, ``catenary_env_policy.json``
@@ -17,6 +18,7 @@ import sys
 from typing import Any
 
 from catenary_env.cli.progress import ProgressDisplay
+from catenary_env.errors import UsageError
 
 __all__ = ["add_parser", "run"]
 
@@ -47,6 +49,14 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="KMH",
         help="train speeds, km/h, one design each (within the policy's training speeds for a meaningful "
         "design)",
+    )
+    parser.add_argument(
+        "--contact-wire-tension",
+        type=float,
+        default=None,
+        metavar="N",
+        help="the contact wire's tension, N, for a policy trained over a range of tensions (required there, "
+        "refused otherwise)",
     )
     parser.add_argument(
         "--no-evaluate",
@@ -86,29 +96,34 @@ def _proposals(args: argparse.Namespace) -> dict[str, Any]:
     policy, record = load_policy(args.policy)
     problem = resolve_problem(record.problem)
     _warn_if_stale(args.policy, record, problem)
-    catenary = _catenary_definition(record.problem)
+    tension = _tension(args, record)
+    if tension is not None:
+        problem = problem.with_contact_wire_tension(tension)  # a tension outside the allowed range: refused
+    catenary = _catenary_definition(record.problem, tension)
     for speed in args.speed:
         if catenary is not None:
             check_speed(catenary, speed / 3.6)
-        if not _trained_for(record, speed):
+        if not _trained_for(record, speed, tension):
             print(
-                f"catenary propose: warning: {speed:g} km/h is outside the policy's training speeds "
-                f"({record.speeds}): its design there is an extrapolation or an interpolation",
+                f"catenary propose: warning: {speed:g} km/h{_at_tension(tension)} is outside the policy's "
+                f"training {'speeds' if tension is None else 'conditions'} ({record.speeds}): its design "
+                "there is an extrapolation or an interpolation",
                 file=sys.stderr,
             )
     fidelity = args.fidelity or record.env_spec.fidelity
     proposals = []
     progress = ProgressDisplay("propose", len(args.speed), "speeds", quiet=args.json or args.no_evaluate)
     for speed in args.speed:
-        x = design_for_speed(policy, problem, speed)
+        x = design_for_speed(policy, problem, speed, tension)
         entry: dict[str, Any] = {
             "speed_kmh": speed,
+            "contact_wire_tension": tension,
             "design": dict(zip(problem.variable_names, x.tolist(), strict=True)),
         }
         if not args.no_evaluate:
             outcome = problem.simulate(tuple(float(v) for v in x), float(speed), fidelity)
             entry.update(feasible=outcome.feasible, sigma=outcome.sigma, reason=outcome.reason)
-            entry["reference_sigma"] = _reference_sigma(record.problem, speed, fidelity)
+            entry["reference_sigma"] = _reference_sigma(record.problem, speed, fidelity, tension)
         proposals.append(entry)
         progress.update(len(proposals))
     progress.finish()
@@ -119,33 +134,64 @@ def _proposals(args: argparse.Namespace) -> dict[str, Any]:
         "speeds": record.speeds,
         "fidelity": None if args.no_evaluate else fidelity,
         "proposals": proposals,
-        "units": {"speed_kmh": "km/h", "design": "m", "sigma, reference_sigma": "N"},
+        "units": {
+            "speed_kmh": "km/h",
+            "contact_wire_tension": "N",
+            "design": "m",
+            "sigma, reference_sigma": "N",
+        },
     }
 
 
-def _catenary_definition(name: str) -> Any:
+def _tension(args: argparse.Namespace, record: Any) -> float | None:
+    """The contact-wire tension asked for, N: required by a policy trained over a tension range, refused by
+    another (a UsageError naming the option)."""
+    tension = getattr(args, "contact_wire_tension", None)
+    conditioned = record.env_spec.contact_wire_tension_range is not None
+    if conditioned and tension is None:
+        raise UsageError(f"--contact-wire-tension: required, N: the policy was trained on {record.speeds}")
+    if not conditioned and tension is not None:
+        raise UsageError(
+            f"--contact-wire-tension {tension:g}: the policy was trained on its preset's tension only "
+            f"({record.speeds}); leave it out"
+        )
+    return tension
+
+
+def _at_tension(tension: float | None) -> str:
+    return "" if tension is None else f" with the contact wire at {tension / 1000:g} kN"
+
+
+def _catenary_definition(name: str, tension: float | None = None) -> Any:
     """The catenary of a catenary design problem (for its speed limit), or None for another problem."""
     from catenary_env.problems import PROBLEMS
 
-    return PROBLEMS[name].catenary_definition if name in PROBLEMS else None
+    return PROBLEMS[name].with_contact_wire_tension(tension).catenary_definition if name in PROBLEMS else None
 
 
-def _reference_sigma(name: str, speed: float, fidelity: str) -> float | None:
-    """σ of a catenary problem's reference design at the speed, N (None for another problem)."""
+def _reference_sigma(name: str, speed: float, fidelity: str, tension: float | None = None) -> float | None:
+    """σ of a catenary problem's reference design at the speed (and tension), N (None for another problem)."""
     from catenary_env.problems import PROBLEMS
 
     if name not in PROBLEMS:
         return None
-    statistics = PROBLEMS[name].reference_evaluation(speed, fidelity).statistics
+    problem = PROBLEMS[name].with_contact_wire_tension(tension)
+    statistics = problem.reference_evaluation(speed, fidelity).statistics
     return None if statistics is None else float(statistics.std)
 
 
-def _trained_for(record: Any, speed: float) -> bool:
+def _trained_for(record: Any, speed: float, tension: float | None = None) -> bool:
     spec = record.env_spec
     if spec.speed_range is not None:
         held_out = any(a <= speed <= b for a, b in spec.excluded_speeds)
-        return spec.speed_range[0] <= speed <= spec.speed_range[1] and not held_out
-    return spec.speed_kmh is None or abs(speed - spec.speed_kmh) < 1e-9
+        trained = spec.speed_range[0] <= speed <= spec.speed_range[1] and not held_out
+    else:
+        trained = spec.speed_kmh is None or abs(speed - spec.speed_kmh) < 1e-9
+    if tension is None or spec.contact_wire_tension_range is None:
+        return trained
+    lo, hi = spec.contact_wire_tension_range
+    held_out = any(a <= tension <= b for a, b in spec.excluded_tensions)
+    return trained and lo <= tension <= hi and not held_out
 
 
 def _warn_if_stale(path: str, record: Any, problem: Any) -> None:
@@ -170,7 +216,7 @@ def _proposal_table(report: dict[str, Any]) -> str:
     if record["command"]:
         lines.append(f"reproduce: {record['command']}")
     for entry in report["proposals"]:
-        lines.append(f"at {entry['speed_kmh']:g} km/h:")
+        lines.append(f"at {entry['speed_kmh']:g} km/h{_at_tension(entry['contact_wire_tension'])}:")
         lines.extend(f"  {name} = {value:.3f} m" for name, value in entry["design"].items())
         if "feasible" in entry:
             lines.append(_sigma_line(entry, report["fidelity"]))
