@@ -84,6 +84,26 @@ def test_the_env_draws_tensions_on_their_grid_outside_the_held_out_band_and_obse
     assert len(drawn) > 20
 
 
+def test_the_tension_conditioned_env_passes_the_environment_checkers():
+    pytest.importorskip("matplotlib", reason="rendering needs matplotlib")
+    import warnings
+
+    from gymnasium.utils.env_checker import check_env
+
+    checkers = [check_env]
+    sb3_checker = pytest.importorskip("stable_baselines3.common.env_checker")
+    checkers.append(sb3_checker.check_env)
+    for checker in checkers:
+        env = _tension_env(render_mode="rgb_array")
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            checker(env.unwrapped)
+        said = [
+            str(w.message) for w in caught if "gymnasium" in w.filename or "stable_baselines3" in w.filename
+        ]
+        assert said == [], checker
+
+
 def test_a_design_at_two_tensions_is_two_simulations_and_the_presets_tension_is_the_preset():
     env = _tension_env()
     design = np.zeros(5, dtype=np.float32)
