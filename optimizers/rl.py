@@ -769,17 +769,12 @@ def design_for_speed(
     ndarray, shape (n_variables,)
         The design's variables, m, on the grid.
     """
-    conditioned = policy.env_spec.contact_wire_tension_range is not None
-    if conditioned != (contact_wire_tension is not None):
-        trained = policy.env_spec.conditions
+    trained = policy.env_spec.conditions
+    if policy.env_spec.contact_wire_tension_range is not None and contact_wire_tension is None:
+        raise ValueError(f"contact_wire_tension: give the tension, N: the policy was trained on {trained}")
+    if policy.env_spec.contact_wire_tension_range is None and contact_wire_tension is not None:
         raise ValueError(
-            f"contact_wire_tension = {contact_wire_tension!r}: "
-            + (
-                "give the tension, N: the policy was trained on "
-                if conditioned
-                else "the policy knows none: "
-            )
-            + trained
+            f"contact_wire_tension = {contact_wire_tension!r}: the policy knows none ({trained})"
         )
     options = {"speed_kmh": float(speed_kmh)}
     if contact_wire_tension is not None:

@@ -405,7 +405,9 @@ def rl_env_spec(problem: str, args: argparse.Namespace) -> Any:
     return spec
 
 
-def _bands(values: list[float], value_range: Any, option: str, unit: str, range_option: str) -> tuple:
+def _bands(
+    values: list[float], value_range: Any, option: str, unit: str, range_option: str
+) -> tuple[tuple[float, float], ...]:
     """The held-out bands ``((a, b), ...)`` of an option's pairs of values; a UsageError for an odd count or
     bands without their range."""
     if values and (value_range is None or len(values) % 2):
