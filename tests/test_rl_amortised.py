@@ -82,6 +82,14 @@ def test_the_study_runs_on_the_synthetic_problem_and_replays(tmp_path, monkeypat
     )
     _check_study(config, tmp_path, monkeypatch)
 
+    # catenary report finds the study in rl/amortised, and does not take it for study 5 (rl/)
+    from experiments.cli.report import build_report
+
+    report = build_report(tmp_path).read_text(encoding="utf-8")
+    assert "## rl-amortised: speed-conditioned PPO and SAC policies" in report
+    assert "![learning_curves](rl/amortised/learning_curves.png)" in report
+    assert "## rl:" not in report and "`catenary experiment rl`," in report  # not run yet
+
 
 @pytest.mark.slow  # the real quick study: PPO and SAC on B1 on two envs, GA runs at 230 and 260 km/h
 def test_rl_amortised_quick(tmp_path, monkeypatch):

@@ -16,10 +16,12 @@ __all__ = ["STUDIES", "Study", "add_parser", "run"]
 
 
 class Study(NamedTuple):
-    """A study of ``catenary experiment``: its module in ``experiments`` and one line for ``--help``."""
+    """A study of ``catenary experiment``: its module in ``experiments``, one line for ``--help`` and its
+    folder in the studies' output folder (default: its name)."""
 
     module: str
     summary: str
+    folder: str = ""
 
 
 STUDIES = {
@@ -35,10 +37,14 @@ STUDIES = {
     ),
     "rl": Study("rl_studies", "PPO learning curves, a speed-conditioned policy, a design for 200-320 km/h"),
     "rl-amortised": Study(
-        "rl_amortised", "speed-conditioned PPO and SAC policies at held-out speeds against a GA run per speed"
+        "rl_amortised",
+        "speed-conditioned PPO and SAC policies at held-out speeds against a GA run per speed",
+        "rl/amortised",
     ),
     "rl-tension": Study(
-        "rl_tension", "SAC policies conditioned on speed and contact-wire tension, against a GA run each"
+        "rl_tension",
+        "SAC policies conditioned on speed and contact-wire tension, against a GA run each",
+        "rl/tension",
     ),
     "tolerance": Study(
         "tolerance",

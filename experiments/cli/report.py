@@ -37,14 +37,24 @@ def build_report(out: Path) -> Path | None:
     study's tables, re-made from its data without simulating, and its figures; None when no study has data
     under ``out``."""
     sections, missing, made = [], [], {}
+    homes = {name: study.folder or name for name, study in STUDIES.items()}
     for name, study in STUDIES.items():
-        folders = {name: Path(out) / name, f"{name} ({FULL_PROTOCOL})": Path(out) / FULL_PROTOCOL / name}
-        found = {title: f for title, f in folders.items() if f.is_dir() and any(f.rglob("*.csv"))}
+        # Another study's folder may lie inside this one's (rl/amortised in rl): its files are not this one's.
+        nested = [
+            Path(h).relative_to(homes[name])
+            for other, h in homes.items()
+            if other != name and Path(h).is_relative_to(homes[name])
+        ]
+        folders = {
+            name: Path(out) / homes[name],
+            f"{name} ({FULL_PROTOCOL})": Path(out) / FULL_PROTOCOL / homes[name],
+        }
+        found = {title: f for title, f in folders.items() if f.is_dir() and _own(f, "*.csv", nested)}
         if name not in found:
             missing.append(name)
         for title, folder in found.items():
             module = importlib.import_module(f"experiments.{study.module}")
-            figures = [f"![{p.stem}]({p.relative_to(out).as_posix()})" for p in sorted(folder.rglob("*.png"))]
+            figures = [f"![{p.stem}]({p.relative_to(out).as_posix()})" for p in _own(folder, "*.png", nested)]
             sections.append("\n\n".join([f"## {title}: {study.summary}", module.report(folder), *figures]))
         made.update(found)
     if not sections:
@@ -57,6 +67,16 @@ def build_report(out: Path) -> Path | None:
     path = Path(out) / REPORT
     path.write_text("# catenary-env: study results\n\n" + "\n\n".join(sections) + "\n", encoding="utf-8")
     return path
+
+
+def _own(folder: Path, pattern: str, nested: list[Path]) -> list[Path]:
+    """The files matching ``pattern`` in ``folder`` and below, but for those in the ``nested`` folders
+    (relative to ``folder``) of other studies."""
+    return sorted(
+        path
+        for path in folder.rglob(pattern)
+        if not any(path.relative_to(folder).is_relative_to(n) for n in nested)
+    )
 
 
 def run(args: argparse.Namespace) -> int:
