@@ -326,6 +326,8 @@ class DesignProblem:
         """The same problem on its catenary with the contact wire at ``contact_wire_tension``, N (None: the
         preset's); ValueError naming the allowed range outside :data:`TENSION_FRACTIONS` of the preset's."""
         tension = None if contact_wire_tension is None else float(contact_wire_tension)
+        if tension == self.contact_wire_tension:
+            return self  # the evaluations of every worker pass through here: no new problem for nothing
         return dataclasses.replace(self, contact_wire_tension=tension)
 
     @property
