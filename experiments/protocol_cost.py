@@ -158,6 +158,10 @@ def main(argv: list[str] | None = None) -> None:
     if args.cores < 1:
         parser.error(f"--cores {args.cores}: must be at least 1")
     out = args.out or args.archive.parent / "optimizers" / "cost.md"
+    if not out.parent.is_dir():  # before the archive is read
+        parser.error(
+            f"--out {out}: no folder {out.parent} to write it in; give --out FILE in a folder that exists"
+        )
     out.write_text(report(args.archive, args.title, args.cores), encoding="utf-8")
     print(out.read_text(encoding="utf-8"))
 

@@ -3,6 +3,8 @@ and made, simulation time, and run time without the interruptions between sessio
 
 from __future__ import annotations
 
+import pytest
+
 from experiments import protocol_cost
 from optimizers.archive import finished_runs, write_run_file
 
@@ -60,3 +62,12 @@ def test_a_run_on_two_cores_reports_its_wall_time_and_core_time(tmp_path):
     assert "Each run held 2 cores" in text and "rebuilt from an export" not in text
     assert "0.6 h on 2 cores (1.2 core-hours), against 1.0 core-hours of simulation" in text
     assert "| ppo | benchmark | 1 | 60.0 (60.0–60.0) | 1 | 36.0 (36.0–36.0) |" in text
+
+
+def test_a_report_with_nowhere_to_go_is_refused_naming_the_option(tmp_path, capsys):
+    archive = tmp_path / "rl" / "amortised" / "archive"
+    archive.mkdir(parents=True)
+    with pytest.raises(SystemExit) as stopped:
+        protocol_cost.main(["--archive", str(archive)])
+    assert stopped.value.code == 2
+    assert f"--out {archive.parent / 'optimizers' / 'cost.md'}: no folder" in capsys.readouterr().err
