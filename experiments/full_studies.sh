@@ -7,7 +7,8 @@ set -euo pipefail
 # over both problems, which takes every run from the store (nothing is simulated again) and writes their
 # combined results; last, the two-pantograph and the tolerance studies (they read the design studies'
 # optima), and the report. The lanes write their partial tables into OUT/lanes (scratch, not committed).
-# The amortised RL study has a script of its own (experiments/full_rl_amortised.sh, 20 h).
+# The amortised RL studies have scripts of their own (experiments/full_rl_amortised.sh, some 23 h, then
+# experiments/full_rl_tension.sh, some 5 h).
 # Each command resumes from OUT/runs.sqlite, so this script can be killed and started again at any time;
 # it takes about 35 hours on two cores (docs/performance.md, 'The full studies' and 'The full protocol of the
 # optimiser benchmark').
