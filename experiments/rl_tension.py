@@ -144,10 +144,11 @@ def _simulate(
     designs: list[tuple[str, int, float, tuple[float, ...]]],
     tables: dict[str, list[dict[str, Any]]],
 ) -> None:
-    """Simulate (or find in the store) each (design, seed, tension, x) at :data:`SPEED_KMH`; add its row."""
+    """Simulate (or find in the store) each (design, seed, tension, x) at :data:`SPEED_KMH`; add its row.
+    One design a tension (another problem each): in this process, without a pool to start for each."""
     held_out = dict(config.tensions)
     for design, seed, tension, x in designs:
-        (outcome,) = evaluate_designs(store, _at(tension), [(x, SPEED_KMH)], config.fidelity, config.workers)
+        (outcome,) = evaluate_designs(store, _at(tension), [(x, SPEED_KMH)], config.fidelity)
         tables["designs"].append(
             {
                 "problem": label(tension), "design": design, "seed": seed, "speed_kmh": SPEED_KMH,
