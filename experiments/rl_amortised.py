@@ -213,11 +213,7 @@ def main(config: Config) -> Path:
     tables: dict[str, list[dict[str, Any]]] = {k: [] for k in ("steps", "ga", "curves", "designs")}
     store_path = config.store or Path(config.out) / STORE
     with RunStore(store_path) as store:
-        if config.archive is not None:
-            Path(config.archive).mkdir(parents=True, exist_ok=True)
-            restored = restore_runs(store, config.archive)
-            print(f"{restored} run(s) restored from {config.archive} into {store_path}", file=sys.stderr)
-            stamp_study(config.archive, catenaries_of(config.problems))
+        restore_archive(config, store, store_path)
         for problem in config.problems:
             check_starts_at_reference(problem)
             _reference_designs(store, config, problem, tables["designs"])
@@ -225,14 +221,31 @@ def main(config: Config) -> Path:
             for learner in config.learners:
                 for seed in config.seeds:
                     _policy(store, store_path, config, problem, learner, seed, folder, tables)
-    for name, key in (("steps", "steps"), ("ga_runs", "ga"), ("ga_curves", "curves"), ("designs", "designs")):
-        if tables[key]:  # no GA curve when no GA run met a feasible design
-            write_csv(folder / f"{name}.csv", tables[key])
-    stamp_study(folder, catenaries_of(config.problems))
+    write_tables(config, folder, tables)
     report(folder)
     if config.archive is not None:
         write_cost(Path(config.archive), folder, config.envs)
     return folder
+
+
+def restore_archive(config: Config, store: RunStore, store_path: Path) -> None:
+    """With ``config.archive``: restore its runs into the store (a fresh checkout resumes from it) and stamp
+    it with the model of its problems."""
+    if config.archive is None:
+        return
+    Path(config.archive).mkdir(parents=True, exist_ok=True)
+    restored = restore_runs(store, config.archive)
+    print(f"{restored} run(s) restored from {config.archive} into {store_path}", file=sys.stderr)
+    stamp_study(config.archive, catenaries_of(config.problems))
+
+
+def write_tables(config: Config, folder: Path, tables: dict[str, list[dict[str, Any]]]) -> None:
+    """The study's data files (``steps.csv``, ``ga_runs.csv``, ``ga_curves.csv``, ``designs.csv``) and the
+    stamp of the model that made them."""
+    for name, key in (("steps", "steps"), ("ga_runs", "ga"), ("ga_curves", "curves"), ("designs", "designs")):
+        if tables[key]:  # no GA curve when no GA run met a feasible design
+            write_csv(folder / f"{name}.csv", tables[key])
+    stamp_study(folder, catenaries_of(config.problems))
 
 
 def write_cost(archive: Path, folder: Path, cores: int) -> None:

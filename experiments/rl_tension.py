@@ -36,7 +36,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from optimizers.archive import restore_runs
 from optimizers.catenary_adapter import CatenaryProblem, catenary_problem
 from optimizers.rl import EnvSpec, design_for_speed, save_policy, train_design_policy
 from optimizers.runner import optimize
@@ -54,7 +53,6 @@ from .common import (
     write_csv,
 )
 from .design_evaluations import evaluate_designs, study_problem
-from .model_stamp import catenaries_of, stamp_study
 from .rl_amortised import HELD_OUT, SPEED_RANGE
 
 NAME = "rl/tension"
@@ -113,21 +111,14 @@ def main(config: Config) -> Path:
     store_path = config.store or Path(config.out) / STORE
     rl_amortised.check_starts_at_reference(PROBLEM)
     with RunStore(store_path) as store:
-        if config.archive is not None:
-            Path(config.archive).mkdir(parents=True, exist_ok=True)
-            restored = restore_runs(store, config.archive)
-            print(f"{restored} run(s) restored from {config.archive} into {store_path}", file=sys.stderr)
-            stamp_study(config.archive, catenaries_of((PROBLEM,)))
+        rl_amortised.restore_archive(config, store, store_path)
         reference = tuple(float(v) for v in study_problem(PROBLEM).reference_x())  # type: ignore[union-attr]
         _simulate(store, config, [("reference", -1, t, reference) for t, _ in config.tensions], tables)
         _ga_runs(store, config, tables)
         for learner in config.learners:
             for seed in config.seeds:
                 _policy(store, store_path, config, learner, seed, folder, tables)
-    for name, key in (("steps", "steps"), ("ga_runs", "ga"), ("ga_curves", "curves"), ("designs", "designs")):
-        if tables[key]:
-            write_csv(folder / f"{name}.csv", tables[key])
-    stamp_study(folder, catenaries_of((PROBLEM,)))
+    rl_amortised.write_tables(config, folder, tables)
     report(folder)
     if config.archive is not None:
         rl_amortised.write_cost(Path(config.archive), folder, config.envs)
