@@ -261,3 +261,19 @@ def test_catenary_optimize_runs_a_problem_at_another_tension_and_a_policy_over_t
     assert record.env_spec.contact_wire_tension_range == (20000.0, 28000.0)
     assert record.env_spec.excluded_tensions == ((21500.0, 22500.0),)
     assert " ".join(tensions) in record.command
+
+
+def test_catenary_evaluate_simulates_a_design_at_another_tension(capsys):
+    from catenary_env.cli import main
+
+    command = ["evaluate", "B1", "--x", "0", "0", "0", "0", "0", "--fidelity", "test", "--speed", "300"]
+    assert main([*command, "--contact-wire-tension", "24000", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    expected = get_problem("B1").with_contact_wire_tension(24000.0).evaluate(np.zeros(5), 300.0, "test")
+    assert (
+        record["contact_wire_tension"] == 24000.0 and record["statistics"]["std"] == expected.statistics.std
+    )
+    assert main(command) == 0
+    assert "problem B1 at 300 km/h, contact wire at 22 kN (test fidelity)" in capsys.readouterr().out
+    assert main([*command, "--contact-wire-tension", "12000"]) == 2
+    assert "contact_wire_tension = 12000.0 N: must be within [15400, 28600] N" in capsys.readouterr().err

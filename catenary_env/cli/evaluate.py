@@ -50,6 +50,14 @@ def add_parser(subparsers: Any) -> None:
         "--speed", type=float, default=300.0, metavar="KMH", help="train speed, km/h (default 300)"
     )
     parser.add_argument(
+        "--contact-wire-tension",
+        type=float,
+        default=None,
+        metavar="N",
+        help="the contact wire's tension, N, within 70-130 %% of the preset's (default: the preset's); the "
+        "preset's uplift force at the speed (docs/problems.md, 'Contact-wire tension')",
+    )
+    parser.add_argument(
         "--fidelity",
         choices=list(FIDELITIES),
         default="study",
@@ -67,6 +75,7 @@ def run(args: argparse.Namespace) -> int:
     from ..model.buildability import buildability_named
 
     problem = PROBLEMS[args.problem].with_options(buildability=buildability_named(args.buildability))
+    problem = problem.with_contact_wire_tension(args.contact_wire_tension)  # out of range: refused here
     x = checked_variables(problem, list(args.x))
     check_speed(problem.catenary_definition, args.speed / 3.6)
     limits = options.acceptance_limits(args)  # a bad file is refused before any solve
@@ -108,6 +117,7 @@ def _record(
     return {
         "problem": problem.name,
         "speed_kmh": speed,
+        "contact_wire_tension": problem.catenary_definition.contact_wire.tension,
         "fidelity": fidelity,
         "variables": dict(zip(problem.variables, x.tolist(), strict=True)),
         "rounded_to_grid": bool(np.any(np.abs(x - np.asarray(given)) > 1e-12)),
@@ -126,7 +136,7 @@ def _record(
 UNITS = {
     "speed_kmh": "km/h",
     "variables, dropper_lengths": "m",
-    "uplift_force, dropper_forces": "N",
+    "contact_wire_tension, uplift_force, dropper_forces": "N",
     **STATISTICS_UNITS,
     "wall_time": "s",
 }
@@ -146,7 +156,8 @@ def finite_or_null(value: Any) -> Any:
 
 def _table(record: dict[str, Any], evaluation: Evaluation) -> str:
     statistics = evaluation.statistics
-    lines = [f"problem {record['problem']} at {record['speed_kmh']:g} km/h ({record['fidelity']} fidelity)"]
+    where = f"{record['speed_kmh']:g} km/h, contact wire at {record['contact_wire_tension'] / 1000:g} kN"
+    lines = [f"problem {record['problem']} at {where} ({record['fidelity']} fidelity)"]
     lines += [f"  {name:<8} = {value:.3f} m" for name, value in record["variables"].items()]
     if record["rounded_to_grid"]:
         lines.append("  (variables rounded to the grid: heights 1 mm, positions 1 cm)")
