@@ -90,17 +90,20 @@ class CatenaryProblem:
     statistic_names: tuple[str, ...] = STATISTICS
     train: Train = SINGLE
     contact_wire_tension: float | None = None
+    registered: str = ""
+    """The name of the problem of ``catenary_env.problems`` it adapts, where :attr:`name` is not (at another
+    tension: ``"B1-T20kN"`` adapts ``"B1"``)."""
 
     @property
     def simulate(self) -> SimulateFunction:
         options: dict[str, object] = {} if self.train == SINGLE else {"train": self.train}
         if self.contact_wire_tension is not None:
             options["contact_wire_tension"] = self.contact_wire_tension
-        return functools.partial(simulate_catenary_design, self.name, **options)
+        return functools.partial(simulate_catenary_design, self.registered or self.name, **options)
 
     def with_contact_wire_tension(self, contact_wire_tension: float | None) -> CatenaryProblem:
         """The same problem with its contact wire at ``contact_wire_tension``, N (None: the preset's)."""
-        return catenary_problem(self.name, self.train, contact_wire_tension)
+        return catenary_problem(self.registered or self.name, self.train, contact_wire_tension)
 
 
 def catenary_problem(
@@ -109,7 +112,7 @@ def catenary_problem(
     """Adapt the design problem ``name`` of ``catenary_env.problems`` (e.g. ``"B1"``), with the ``train``'s
     pantographs behind the leading one (its objective's σ; the stored results' key includes it) and its
     contact wire at ``contact_wire_tension``, N (default the preset's; the model's fingerprint, and so the
-    stored results' key, includes it).
+    stored results' key, includes it, and the name says it: ``"B1-T20kN"``).
 
     Raises
     ------
@@ -122,8 +125,9 @@ def catenary_problem(
     # The problem module calls its names `variables`; the interface agreed in the issue says
     # `variable_names`: accept either, so that a rename there does not break the optimisers.
     names = getattr(problem, "variable_names", None) or problem.variables
+    tension = problem.contact_wire_tension
     return CatenaryProblem(
-        problem.name,
+        problem.name if tension is None else f"{problem.name}-T{tension / 1000:g}kN",
         tuple(names),
         np.array(problem.lower, dtype=np.float64),
         np.array(problem.upper, dtype=np.float64),
@@ -132,5 +136,6 @@ def catenary_problem(
         if train == SINGLE
         else model_fingerprint(problem.store_fingerprint(), train),
         train=train,
-        contact_wire_tension=problem.contact_wire_tension,
+        contact_wire_tension=tension,
+        registered=problem.name,
     )

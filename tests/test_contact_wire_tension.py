@@ -252,7 +252,9 @@ def test_catenary_optimize_runs_a_problem_at_another_tension_and_a_policy_over_t
     assert main([*argv, "--optimizer", "random", "--contact-wire-tension", "20000"]) == 0
     with sqlite3.connect(store) as connection:
         (key,) = connection.execute("SELECT DISTINCT problem FROM evaluations").fetchone()
-    assert key == GridSpace.from_problem(catenary_problem("B1", contact_wire_tension=20000.0)).store_key
+    at_20 = catenary_problem("B1", contact_wire_tension=20000.0)
+    assert key == GridSpace.from_problem(at_20).store_key and key.startswith("B1-T20kN@")  # says its tension
+    assert at_20.simulate.args == ("B1",) and at_20.with_contact_wire_tension(None).name == "B1"
     policy = tmp_path / "policy.zip"
     tensions = ["--contact-wire-tension-range", "20000", "28000", "--held-out-tensions", "21500", "22500"]
     rl = ["--optimizer", "sac", "--speed-range", "250", "300", *tensions, "--save-policy", str(policy)]
