@@ -3,6 +3,7 @@ on the tension (docs/problems.md, 'Contact-wire tension')."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import sqlite3
@@ -31,7 +32,8 @@ def test_a_problem_at_another_tension_is_another_model_whose_contact_wire_carrie
     b1 = get_problem("B1")
     low = b1.with_contact_wire_tension(18000.0)
     assert b1.catenary_definition.contact_wire.tension == PRESET
-    assert b1.with_contact_wire_tension(PRESET).store_fingerprint() == b1.store_fingerprint()
+    assert b1.with_contact_wire_tension(PRESET) is b1  # the preset itself
+    assert dataclasses.replace(b1, contact_wire_tension=PRESET).store_fingerprint() == b1.store_fingerprint()
     assert low.store_fingerprint() != b1.store_fingerprint()  # its results never mix with the preset's
     assert low.catenary_definition.wave_speed == pytest.approx(
         b1.catenary_definition.wave_speed * math.sqrt(18000.0 / PRESET), rel=1e-12

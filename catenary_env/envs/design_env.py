@@ -467,7 +467,7 @@ class CatenaryDesignEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     def _condition_text(self) -> str:
         speeds = ", ".join(f"{v:g}" for v in self._speeds) + " km/h"
-        if self.problem.contact_wire_tension is None:
+        if self._tension_range is None and self.problem.contact_wire_tension is None:
             return speeds
         return f"{speeds}, contact wire at {self._tension / 1000:g} kN"
 

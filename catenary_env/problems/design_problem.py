@@ -323,9 +323,12 @@ class DesignProblem:
         )
 
     def with_contact_wire_tension(self, contact_wire_tension: float | None) -> DesignProblem:
-        """The same problem on its catenary with the contact wire at ``contact_wire_tension``, N (None: the
-        preset's); ValueError naming the allowed range outside :data:`TENSION_FRACTIONS` of the preset's."""
+        """The same problem on its catenary with the contact wire at ``contact_wire_tension``, N (None, or the
+        preset's own tension: the problem on the preset); ValueError naming the allowed range outside
+        :data:`TENSION_FRACTIONS` of the preset's."""
         tension = None if contact_wire_tension is None else float(contact_wire_tension)
+        if tension == preset_catenary(self.catenary).contact_wire.tension:
+            tension = None  # the preset itself: one name, one key in the run store
         if tension == self.contact_wire_tension:
             return self  # the evaluations of every worker pass through here: no new problem for nothing
         return dataclasses.replace(self, contact_wire_tension=tension)
