@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from optimizers.catenary_adapter import CatenaryProblem, catenary_problem
-from optimizers.rl import EnvSpec, design_for_speed, save_policy, train_design_policy
+from optimizers.rl import EnvSpec, design_for_speed, load_policy, save_policy, train_design_policy
 from optimizers.runner import optimize
 from optimizers.store import RunStore
 
@@ -118,6 +118,7 @@ def main(config: Config) -> Path:
         for learner in config.learners:
             for seed in config.seeds:
                 _policy(store, store_path, config, learner, seed, folder, tables)
+                _speed_only_policy(store, config, learner, seed, tables)
     rl_amortised.write_tables(config, folder, tables)
     report(folder)
     if config.archive is not None:
@@ -195,6 +196,27 @@ def _policy(
     print(f"{learner} on {PROBLEM} over tensions, seed {seed}: {best}", file=sys.stderr, flush=True)
 
 
+SPEED_ONLY = "speed only"
+"""The table's word for study 5b's policies, conditioned on the speed alone (trained at the preset's
+tension)."""
+
+
+def _speed_only_policy(
+    store: RunStore, config: Config, learner: str, seed: int, tables: dict[str, list[dict[str, Any]]]
+) -> None:
+    """Study 5b's policy of the same learner and seed on B1 (conditioned on the speed alone, trained at the
+    preset's tension), where its results are in ``out`` at this fidelity: its design at :data:`SPEED_KMH`,
+    simulated at each tension of the table. What conditioning on the tension adds is the difference."""
+    path = Path(config.out) / rl_amortised.NAME / "policies" / f"{learner}-{PROBLEM}-seed{seed}.zip"
+    if not path.is_file():
+        return
+    policy, record = load_policy(path)
+    if record.env_spec.fidelity != config.fidelity or record.env_spec.contact_wire_tension_range is not None:
+        return
+    x = tuple(design_for_speed(policy, catenary_problem(PROBLEM), SPEED_KMH).tolist())
+    _simulate(store, config, [(f"{learner} {SPEED_ONLY}", seed, t, x) for t, _ in config.tensions], tables)
+
+
 def reproduce_command(config: Config, store: Path, learner: str, seed: int, policy: Path) -> str:
     """The command that reproduces (resumes from the store) one policy's run and saves it again: ``catenary
     optimize`` in the full setting, else the study's own command restricted to that run."""
@@ -226,7 +248,8 @@ def report(folder: Path) -> str:
     curves = read_csv(folder / "ga_curves.csv") if (folder / "ga_curves.csv").is_file() else []
     ga_runs = read_csv(folder / "ga_runs.csv")
     window = rl_amortised.window_of(steps)
-    ledger = rl_amortised.amortisation_ledger(designs, curves, ga_runs, steps, trained_on=trained_on)
+    trained = [d for d in designs if not str(d["design"]).endswith(SPEED_ONLY)]  # no training here
+    ledger = rl_amortised.amortisation_ledger(trained, curves, ga_runs, steps, trained_on=trained_on)
     write_csv(folder / "ledger.csv", ledger)
     tension_of = {r["problem"]: r["tension_N"] for r in designs}
     table = [
@@ -241,7 +264,8 @@ def report(folder: Path) -> str:
         ),
         (
             f"Policies against a GA run per tension at {SPEED_KMH:g} km/h "
-            f"({rl_amortised.ga_budgets(ga_runs)}; –: no feasible design)",
+            f"({rl_amortised.ga_budgets(ga_runs)}; –: no feasible design; {SPEED_ONLY}: study 5b's policy, "
+            "trained at 22 kN only)",
             table,
             TABLE_COLUMNS,
         ),

@@ -46,8 +46,9 @@ def test_the_ledger_counts_one_policy_against_a_ga_run_per_tension():
     assert row["break_even_same_sigma"] == 16.0  # 16 x 40 = 640 >= 600 + 16
 
 
-@pytest.mark.slow  # the quick study: SAC on B1 over tensions on two envs, GA runs at 22 and 24 kN
+@pytest.mark.slow  # the quick studies: 5b's SAC on B1, then SAC on B1 over tensions, GA runs at 22 and 24 kN
 def test_rl_tension_quick(tmp_path, monkeypatch):
+    rl_amortised.main(rl_amortised.Config(out=tmp_path, learners=("sac",)))  # its speed-only policy
     config = rl_tension.Config(out=tmp_path)
     folder = rl_tension.main(config)
     assert folder == tmp_path / "rl" / "tension"
@@ -64,7 +65,9 @@ def test_rl_tension_quick(tmp_path, monkeypatch):
         if not any(a <= 100.0 * t <= b for a, b in rl_tension.HELD_OUT_TENSIONS)
     }
     with sqlite3.connect(tmp_path / "runs.sqlite") as connection:
-        (run_id,) = connection.execute("SELECT run_id FROM runs WHERE optimizer = 'sac'").fetchone()
+        (run_id,) = connection.execute(
+            "SELECT run_id FROM runs WHERE optimizer = 'sac' AND options LIKE '%tension_range%'"
+        ).fetchone()
         keys = {
             k for (k,) in connection.execute("SELECT problem FROM evaluations WHERE run_id = ?", (run_id,))
         }
@@ -76,6 +79,12 @@ def test_rl_tension_quick(tmp_path, monkeypatch):
     text = (folder / "tension.md").read_text(encoding="utf-8")
     assert "### Policies against a GA run per tension at 300 km/h (GA: 12 simulations" in text
     assert "| 22 | yes | sac |" in text and "### Amortisation ledger" in text
+    # study 5b's policy (trained at the preset's tension alone) beside it; not in the ledger
+    speed_only = [r for r in designs if r["design"] == "sac speed only"]
+    assert {r["tension_N"] for r in speed_only} == {t for t, _ in config.tensions}
+    assert len({r["x_m"] for r in speed_only}) == 1  # one design, whatever the tension
+    assert "| 22 | yes | sac speed only |" in text
+    assert {r["learner"] for r in read_csv(folder / "ledger.csv")} == {"sac"}
 
     def refuse(*args, **kwargs):
         raise AssertionError("a design was simulated")
