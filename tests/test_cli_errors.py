@@ -151,6 +151,7 @@ CASES: list[tuple[str, list[str], str, Callable[[Path], None] | None]] = [
     ("budget-zero", ["optimize", "synthetic-quadratic", "--budget", "0"], "budget", None),
     ("seed-negative", [*OPT, "--seed", "-1"], "seed", None),
     ("unknown-problem", ["optimize", "nosuch", "--budget", "5"], "nosuch", None),
+    ("unknown-optimizer", [*OPT, "--optimizer", "nosuch"], "or an RL learner: ppo, sac", None),
     ("workers-zero", [*OPT, "--workers", "0"], "workers", None),
     ("max-evaluations-zero", [*OPT, "--max-evaluations", "0"], "--max-evaluations", None),
     ("progress-every-negative", [*OPT, "--progress-every", "-1"], "--progress-every", None),

@@ -601,7 +601,11 @@ def _tension_range(
             f"{TENSION_STEP:g} N grid between"
         )
     for tension in (lo, hi):
-        problem.with_contact_wire_tension(tension)
+        try:
+            problem.with_contact_wire_tension(tension)
+        except ValueError as error:  # an end outside the allowed tensions: name the range given
+            named = f"contact_wire_tension_range = {contact_wire_tension_range!r}: {error}"
+            raise type(error)(named) from None
     return lo, hi
 
 

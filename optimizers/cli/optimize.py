@@ -21,6 +21,7 @@ import argparse
 import contextlib
 import json
 import os
+import re
 import shlex
 import sys
 from collections.abc import Iterator
@@ -31,7 +32,7 @@ from catenary_env.cli.exits import interruption
 from catenary_env.cli.options import add_train_arguments, train_of
 from catenary_env.cli.paths import check_output_path
 from catenary_env.cli.progress import LOG_INTERVAL
-from catenary_env.errors import MissingDependency, UsageError
+from catenary_env.errors import MissingDependency, UnknownNameError, UsageError
 
 from .. import ga, nevergrad_adapters  # noqa: F401  (register the built-in optimisers)
 from ..archive import restore_runs
@@ -46,6 +47,16 @@ DEFAULT_STORE = "catenary-runs.sqlite"
 
 RL_OPTIMIZERS = ("ppo", "sac")
 """The RL learners (``optimizers.rl.LEARNERS``), trained on a design env rather than asked and told."""
+
+ENV_OPTIONS = {
+    "speed": "--speed",
+    "speed_range": "--speed-range",
+    "excluded_speeds": "--held-out-speeds",
+    "contact_wire_tension": "--contact-wire-tension",
+    "contact_wire_tension_range": "--contact-wire-tension-range",
+    "excluded_tensions": "--held-out-tensions",
+}
+"""The option of each field of an RL run's env, to name in the env's refusal of it."""
 
 DESCRIPTION = (
     "Optimise the design of a catenary problem (docs/problems.md) with the study's genetic algorithm, a "
@@ -221,7 +232,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``optimize`` to the sub-commands of the ``catenary`` command."""
     parser: argparse.ArgumentParser = subparsers.add_parser(
-        "optimize", help="optimise a design problem (GA, nevergrad, PPO)", description=DESCRIPTION
+        "optimize",
+        help="optimise a design problem (GA, nevergrad, optuna, PPO, SAC)",
+        description=DESCRIPTION,
     )
     add_arguments(parser)
     return parser
@@ -234,7 +247,10 @@ def run(args: argparse.Namespace) -> int:
     if not args.progress_every >= 0.0:
         raise UsageError(f"--progress-every {args.progress_every}: must be a number of seconds >= 0")
     if args.optimizer not in RL_OPTIMIZERS:
-        get_optimizer(args.optimizer)  # one line naming those available, before anything is opened
+        try:
+            get_optimizer(args.optimizer)  # one line naming those available, before anything is opened
+        except UnknownNameError as error:
+            raise UsageError(f"{error.args[0]}; or an RL learner: {', '.join(RL_OPTIMIZERS)}") from None
     if args.save_policy is not None:
         if args.optimizer not in RL_OPTIMIZERS:
             raise UsageError(f"--save-policy is for --optimizer ppo or sac, not {args.optimizer}")
@@ -399,9 +415,9 @@ def rl_env_spec(problem: str, args: argparse.Namespace) -> Any:
         )  # fmt: skip
         spec.make().close()  # refuses bad speeds, tensions and bands, naming them, before any training
     except ValueError as error:
-        raise UsageError(
-            f"--speed-range/--held-out-speeds/--contact-wire-tension-range/--held-out-tensions: {error}"
-        ) from None
+        field = re.match(r"[a-z_]*", str(error)).group()  # the env's refusals start with the field
+        option = ENV_OPTIONS.get(field, "/".join(ENV_OPTIONS.values()))
+        raise UsageError(f"{option}: {error}") from None
     return spec
 
 
