@@ -169,13 +169,19 @@ class EnvSpec:
         if self.speed_range is None:
             text = f"{self.speed_kmh:g} km/h"
         else:
-            held_out = "".join(f" except {a:g}-{b:g}" for a, b in self.excluded_speeds)
-            text = f"{self.speed_range[0]:g}-{self.speed_range[1]:g} km/h{held_out}"
+            text = f"{self.speed_range[0]:g}-{self.speed_range[1]:g} km/h{_except(self.excluded_speeds, 1.0)}"
         if self.contact_wire_tension_range is not None:
             lo, hi = self.contact_wire_tension_range
-            held_out = "".join(f" except {a / 1000:g}-{b / 1000:g}" for a, b in self.excluded_tensions)
+            held_out = _except(self.excluded_tensions, 1000.0)
             text += f", contact wire at {lo / 1000:g}-{hi / 1000:g} kN{held_out}"
         return text
+
+
+def _except(bands: Any, unit: float) -> str:
+    """ " except a-b and c-d" of held-out bands, in ``unit`` (empty without bands)."""
+    if not bands:
+        return ""
+    return " except " + " and ".join(f"{a / unit:g}-{b / unit:g}" for a, b in bands)
 
 
 POLICY_SPREAD = 0.2
