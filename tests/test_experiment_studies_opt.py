@@ -386,7 +386,7 @@ def test_from_store_on_a_protocol_not_started_yet(tmp_path, monkeypatch):
 
 def test_from_store_finds_a_ppo_run_where_the_study_stores_it(tmp_path, monkeypatch):
     """The identity ``--from-store`` looks a PPO run up by is the one its training stores it under."""
-    import optimizers.rl
+    import optimizers.rl.training
 
     class Opened(Exception):
         pass
@@ -394,7 +394,7 @@ def test_from_store_finds_a_ppo_run_where_the_study_stores_it(tmp_path, monkeypa
     def capture(store, config, resume, start_if_none=True):
         raise Opened(config)
 
-    monkeypatch.setattr(optimizers.rl, "open_run", capture)
+    monkeypatch.setattr(optimizers.rl.training, "open_run", capture)
     config = optimizer_comparison.Config(out=tmp_path)
     with RunStore(":memory:") as store, pytest.raises(Opened) as opened:
         optimizer_comparison._run(store, config, "ppo", "B1", 1, "")

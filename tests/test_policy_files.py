@@ -131,10 +131,10 @@ def test_a_file_with_other_members_is_refused_before_stable_baselines3_reads_it(
     path = save_policy(policy, tmp_path / "policy.zip", PROBLEM, result)
     with zipfile.ZipFile(path, "a") as archive:
         archive.writestr("payload.pkl", b"\x80\x04N.")
-    import optimizers.rl
+    import optimizers.rl.policy_files
 
     monkeypatch.setattr(
-        optimizers.rl, "import_stable_baselines3", lambda: pytest.fail("the loader was reached")
+        optimizers.rl.policy_files, "import_stable_baselines3", lambda: pytest.fail("the loader was reached")
     )
     with pytest.raises(PolicyFileError, match="other members: payload.pkl") as caught:
         load_policy(path)
