@@ -11,7 +11,7 @@ drawn at each episode from :data:`TENSION_RANGE` outside the held-out bands :dat
 2. *The table*: at the training tensions and the held-out ones (:data:`TABLE_TENSIONS`), all at
    :data:`SPEED_KMH`, σ of the reference design (the level wire), of the GA optimum at that tension (a GA run
    of :attr:`Config.ga_budget` simulations each) and of each policy's design, and the gap policy / GA.
-3. *The amortisation ledger* over the table's tensions (:func:`experiments.rl_amortised.amortisation_ledger`):
+3. *The amortisation ledger* over the table's tensions (:func:`experiments.rl_analysis.amortisation_ledger`):
    N is a number of catenaries (tension and speed) instead of speeds.
 
 Every run goes to the run store and is resumed from it, as in study 5b; a step of the policy is stored
@@ -41,7 +41,7 @@ from optimizers.rl import EnvSpec, design_for_speed, load_policy, save_policy, t
 from optimizers.runner import optimize
 from optimizers.store import RunStore
 
-from . import rl_amortised
+from . import rl_amortised, rl_analysis
 from .common import (
     STORE,
     add_full_option,
@@ -237,7 +237,7 @@ def reproduce_command(config: Config, store: Path, learner: str, seed: int, poli
 
 # -- report (from the data files alone) -------------------------------------------------------------------
 
-TABLE_COLUMNS = [("tension_kN", "contact-wire tension (kN)", "g"), *rl_amortised.TABLE_COLUMNS[2:]]
+TABLE_COLUMNS = [("tension_kN", "contact-wire tension (kN)", "g"), *rl_analysis.TABLE_COLUMNS[2:]]
 """Study 5b's table with the tension in place of the problem and the speed."""
 
 
@@ -247,39 +247,39 @@ def report(folder: Path) -> str:
     designs = read_csv(folder / "designs.csv")
     curves = read_csv(folder / "ga_curves.csv") if (folder / "ga_curves.csv").is_file() else []
     ga_runs = read_csv(folder / "ga_runs.csv")
-    window = rl_amortised.window_of(steps)
+    window = rl_analysis.window_of(steps)
     trained = [d for d in designs if not str(d["design"]).endswith(SPEED_ONLY)]  # no training here
-    ledger = rl_amortised.amortisation_ledger(trained, curves, ga_runs, steps, trained_on=trained_on)
+    ledger = rl_analysis.amortisation_ledger(trained, curves, ga_runs, steps, trained_on=trained_on)
     write_csv(folder / "ledger.csv", ledger)
     tension_of = {r["problem"]: r["tension_N"] for r in designs}
     table = [
         {**row, "tension_kN": tension_of[row["problem"]] / 1000.0}
-        for row in sorted(rl_amortised.speed_table(designs), key=lambda r: tension_of[r["problem"]])
+        for row in sorted(rl_analysis.speed_table(designs), key=lambda r: tension_of[r["problem"]])
     ]
     sections = [
         (
             f"Learning curves (windows of {window} steps)",
-            rl_amortised.learning_summary(steps, window),
-            rl_amortised.LEARNING_COLUMNS,
+            rl_analysis.learning_summary(steps, window),
+            rl_analysis.LEARNING_COLUMNS,
         ),
         (
             f"Policies against a GA run per tension at {SPEED_KMH:g} km/h "
-            f"({rl_amortised.ga_budgets(ga_runs)}; –: no feasible design; {SPEED_ONLY}: study 5b's policy, "
+            f"({rl_analysis.ga_budgets(ga_runs)}; –: no feasible design; {SPEED_ONLY}: study 5b's policy, "
             "trained at 22 kN only)",
             table,
             TABLE_COLUMNS,
         ),
         (
             "Amortisation ledger (N: catenaries, a tension and a speed each)",
-            [r for r in ledger if r["n_speeds"] == rl_amortised.LEDGER_SPEEDS[0]],
-            rl_amortised.LEDGER_COLUMNS,
+            [r for r in ledger if r["n_speeds"] == rl_analysis.LEDGER_SPEEDS[0]],
+            rl_analysis.LEDGER_COLUMNS,
         ),
     ]
     text = "\n\n".join(
         f"### {title}\n\n{markdown_table(rows, columns, missing='–')}" for title, rows, columns in sections
     )
     (folder / "tension.md").write_text(text + "\n", encoding="utf-8")
-    rl_amortised.learning_figure(steps, window, folder / "learning_curves.png")
+    rl_analysis.learning_figure(steps, window, folder / "learning_curves.png")
     return text
 
 

@@ -16,7 +16,7 @@ pytest.importorskip("gymnasium", reason="the policies train on design environmen
 pytest.importorskip("stable_baselines3", reason="PPO and SAC come from stable-baselines3")
 
 from catenary_env.problems.design_problem import DesignProblem  # noqa: E402
-from experiments import rl_amortised  # noqa: E402
+from experiments import rl_amortised, rl_analysis  # noqa: E402
 from experiments.common import markdown_table, read_csv  # noqa: E402
 from optimizers import synthetic  # noqa: E402
 from optimizers.rl import load_policy  # noqa: E402
@@ -97,9 +97,9 @@ def test_rl_amortised_quick(tmp_path, monkeypatch):
 
 
 def test_break_even_counts_the_policys_simulation_per_speed():
-    assert rl_amortised.break_even(1000.0, 101.0) == 10.0  # 10 x 101 = 1010 >= 1000 + 10
-    assert rl_amortised.break_even(1000.0, 100.0) == 11.0  # 10 x 100 < 1010; 11 x 100 >= 1011
-    assert rl_amortised.break_even(1000.0, 1.0) == math.inf
+    assert rl_analysis.break_even(1000.0, 101.0) == 10.0  # 10 x 101 = 1010 >= 1000 + 10
+    assert rl_analysis.break_even(1000.0, 100.0) == 11.0  # 10 x 100 < 1010; 11 x 100 >= 1011
+    assert rl_analysis.break_even(1000.0, 1.0) == math.inf
 
 
 def test_the_ledger_charges_the_ga_what_it_needed_to_reach_the_policys_sigma():
@@ -108,8 +108,8 @@ def test_the_ledger_charges_the_ga_what_it_needed_to_reach_the_policys_sigma():
         {"problem": "P", "speed_kmh": 230.0, "simulations": 40.0, "best_sigma_N": 25.0},
         {"problem": "P", "speed_kmh": 230.0, "simulations": 300.0, "best_sigma_N": 20.0},
     ]
-    assert rl_amortised.ga_simulations_to(curves, "P", 230.0, 26.0) == 40.0
-    assert rl_amortised.ga_simulations_to(curves, "P", 230.0, 19.0) == math.inf
+    assert rl_analysis.ga_simulations_to(curves, "P", 230.0, 26.0) == 40.0
+    assert rl_analysis.ga_simulations_to(curves, "P", 230.0, 19.0) == math.inf
     designs = [
         {
             "problem": "P",
@@ -124,7 +124,7 @@ def test_the_ledger_charges_the_ga_what_it_needed_to_reach_the_policys_sigma():
     ]
     ga_runs = [{"problem": "P", "speed_kmh": 230.0, "n_simulations": 1000}]
     steps = [{"problem": "P", "learner": "sac", "seed": 0}] * 500
-    ledger = rl_amortised.amortisation_ledger(designs, curves, ga_runs, steps, n_speeds=(1, 10))
+    ledger = rl_analysis.amortisation_ledger(designs, curves, ga_runs, steps, n_speeds=(1, 10))
     first, tenth = ledger
     assert first["gap_percent"] == pytest.approx(30.0)
     costs = ("training_simulations", "ga_per_speed", "ga_per_speed_to_policy_sigma")
@@ -141,12 +141,12 @@ def test_the_speeds_share_of_sigma_is_all_of_it_for_a_cubic_and_none_for_noise()
     cubic = [
         {"feasible": 1, "speed_kmh": v, "sigma_N": 20.0 + 1e-5 * (v - 200.0) ** 3 - 0.1 * v} for v in speeds
     ]
-    assert rl_amortised.speed_share(cubic) == pytest.approx(1.0, abs=1e-12)
+    assert rl_analysis.speed_share(cubic) == pytest.approx(1.0, abs=1e-12)
     sigmas = rng.normal(30.0, 2.0, speeds.size)
     noise = [{"feasible": 1, "speed_kmh": v, "sigma_N": s} for v, s in zip(speeds, sigmas, strict=True)]
-    assert rl_amortised.speed_share(noise) < 0.03  # four parameters fitted to 400 points of pure noise
+    assert rl_analysis.speed_share(noise) < 0.03  # four parameters fitted to 400 points of pure noise
     infeasible = [{**row, "feasible": 0, "sigma_N": math.nan} for row in cubic[:395]]
-    assert math.isnan(rl_amortised.speed_share(infeasible + cubic[395:]))  # five feasible: too few to say
+    assert math.isnan(rl_analysis.speed_share(infeasible + cubic[395:]))  # five feasible: too few to say
 
 
 def test_the_drift_measures_the_way_from_the_first_designs_to_the_ga_optima():
@@ -165,7 +165,7 @@ def test_the_drift_measures_the_way_from_the_first_designs_to_the_ga_optima():
             {"problem": "P", "learner": "ppo", "seed": 0, "step": step, "speed_kmh": 200.0 + step,
              "feasible": 1, "sigma_N": 30.0, "x_m": " ".join(f"{v:.9g}" for v in x)}
         )  # fmt: skip
-    (row,) = rl_amortised.design_drift(steps[::-1], designs, window=10)  # any order of the steps
+    (row,) = rl_analysis.design_drift(steps[::-1], designs, window=10)  # any order of the steps
     full = 1e3 * math.hypot(*direction)
     first, last = 0.5 * 2 / 49, 0.5 * 47 / 49  # the windows' mean pairs: 0-4 and 45-49
     assert row["to_ga_first_mm"] == pytest.approx((1.0 - first) * full)

@@ -14,7 +14,7 @@ pytest.importorskip("gymnasium", reason="the policies train on design environmen
 pytest.importorskip("stable_baselines3", reason="SAC comes from stable-baselines3")
 
 from catenary_env.problems.design_problem import DesignProblem  # noqa: E402
-from experiments import rl_amortised, rl_tension  # noqa: E402
+from experiments import rl_amortised, rl_analysis, rl_tension  # noqa: E402
 from experiments.common import read_csv  # noqa: E402
 from optimizers.catenary_adapter import catenary_problem  # noqa: E402
 from optimizers.problem import GridSpace  # noqa: E402
@@ -37,7 +37,7 @@ def test_the_ledger_counts_one_policy_against_a_ga_run_per_tension():
     ]  # fmt: skip
     ga_runs = [{"problem": name, "speed_kmh": 300.0, "n_simulations": 1000} for name in (low, high)]
     steps = [{"problem": "B1", "learner": "sac", "seed": 0}] * 600
-    (row,) = rl_amortised.amortisation_ledger(
+    (row,) = rl_analysis.amortisation_ledger(
         designs, curves, ga_runs, steps, n_speeds=(1,), trained_on=rl_tension.trained_on
     )
     assert (row["problem"], row["training_simulations"]) == ("B1", 600.0)  # one policy, both tensions
