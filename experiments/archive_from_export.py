@@ -23,8 +23,9 @@ from typing import Any
 from optimizers.archive import write_run_file
 from optimizers.store import EXPORT_SOURCE
 
+from .benchmark_report import DONE
 from .common import read_csv
-from .optimizer_comparison import DONE, SPEED_KMH, Config, _prepare
+from .optimizer_comparison import SPEED_KMH, Config, _prepare
 
 REASON = "infeasible (its reason was not kept by the export this run was rebuilt from)"
 """The reason of an infeasible evaluation rebuilt from an export."""

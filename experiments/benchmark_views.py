@@ -16,7 +16,7 @@ fixed-target views, ranks with a significance test, computed from the comparison
   where every optimiser compared has a run (:func:`common_blocks`): a partial set of runs (a protocol still
   running) is ranked on what all optimisers have done, and not at all below :data:`MIN_BLOCKS`.
 - The share of infeasible proposals and the simulation time per run are in the comparison's own table
-  (:func:`experiments.optimizer_comparison.summarise`).
+  (:func:`experiments.benchmark_report.summarise`).
 
 Examples
 --------

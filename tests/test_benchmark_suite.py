@@ -158,7 +158,7 @@ def test_ranks_of_an_unequal_set_are_those_of_the_blocks_every_optimiser_has():
 def test_an_optimiser_not_run_on_every_problem_gets_ranks_with_and_without_it(tmp_path):
     """As PPO, which runs on B1 and SW1 only: the ranks with it are over the problems it runs on; a second
     section ranks the others over every problem's blocks."""
-    from experiments.optimizer_comparison import DONE, NOT_RUN, views
+    from experiments.benchmark_report import DONE, NOT_RUN, views
 
     finals = {"good": 1.0, "mid": 2.0, "bad": 3.0, "narrow": 2.5}
     curves, runs = {}, []
