@@ -44,6 +44,18 @@ def worker_count(text: str) -> int:
     return value
 
 
+def seed_value(text: str) -> int:
+    """``--seeds`` of the studies' command lines: a whole number from 0 to 2³² − 1, what the learners' and
+    numpy's generators take (refused before anything is simulated)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if not 0 <= value < 2**32:
+        raise argparse.ArgumentTypeError(f"{value}: must lie in [0, 2**32 - 1]")
+    return value
+
+
 def study_dir(out: Path, name: str) -> Path:
     """The study's folder ``out/name``, created if absent (a folder that cannot be made is a user error,
     naming ``--out``)."""

@@ -54,6 +54,7 @@ from .common import (
     read_csv,
     run_cli,
     run_study,
+    seed_value,
     study_dir,
     write_csv,
 )
@@ -619,7 +620,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_workers_option(parser, 2)
     parser.add_argument(
-        "--seed", type=int, default=0, metavar="S", help="the GA's random seed, an integer >= 0 (default 0)"
+        "--seed",
+        type=seed_value,
+        default=0,
+        metavar="S",
+        help="the GA's random seed, an integer >= 0 (default 0)",
     )
     add_out_option(parser)
 

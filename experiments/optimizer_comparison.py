@@ -434,7 +434,7 @@ def _optimizer_name(name: str) -> str:
         try:
             get_optimizer(name)
         except KeyError as error:
-            raise argparse.ArgumentTypeError(str(error.args[0])) from None
+            raise argparse.ArgumentTypeError(f"{error.args[0]}; or ppo") from None
     return name
 
 

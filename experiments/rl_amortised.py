@@ -90,6 +90,7 @@ from .common import (
     read_csv,
     run_cli,
     run_study,
+    seed_value,
     study_dir,
     worker_count,
     write_csv,
@@ -164,6 +165,8 @@ class Config:
             object.__setattr__(self, "problems", ("B1", "SW1") if self.full else ("B1",))
         if not self.seeds:
             object.__setattr__(self, "seeds", (0, 1, 2) if self.full else (0,))
+        if any(not 0 <= seed < 2**32 for seed in self.seeds):
+            raise ValueError(f"seeds = {self.seeds!r}: each must lie in [0, 2**32 - 1]")
 
     @property
     def fidelity(self) -> str:
@@ -496,7 +499,7 @@ def add_training_arguments(parser: argparse.ArgumentParser, learners: tuple[str,
         help=f"the RL learners, of {' '.join(LEARNERS)} (default: {' '.join(learners)})",
     )  # fmt: skip
     parser.add_argument(
-        "--seeds", nargs="+", type=int, default=[], metavar="S",
+        "--seeds", nargs="+", type=seed_value, default=[], metavar="S",
         help="the seeds of each learner (default: 0 1 2; quick: 0)",
     )  # fmt: skip
     parser.add_argument(

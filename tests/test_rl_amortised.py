@@ -253,3 +253,8 @@ def test_the_study_resumes_from_its_run_archive_on_a_fresh_checkout(tmp_path, mo
     assert (second / "ga_runs.csv").read_text(encoding="utf-8") == (first / "ga_runs.csv").read_text(
         encoding="utf-8"
     )
+
+
+def test_a_negative_seed_is_refused_before_anything_runs():
+    with pytest.raises(ValueError, match=r"seeds = \(0, -1\): each must lie in \[0, 2\*\*32 - 1\]"):
+        rl_amortised.Config(seeds=(0, -1))
