@@ -175,6 +175,7 @@ CASES: list[tuple[str, list[str], str, Callable[[Path], None] | None]] = [
     # -- studies: their own options, checked before anything is simulated ---------------------------------
     ("experiment-workers", ["experiment", "presag", "--workers", "0"], "--workers", None),
     ("experiment-unknown-option", ["experiment", "validation", "--problems", "B1"], "--problems", None),
+    ("unknown-option", ["presets", "--nosuch"], "catenary presets: error: unrecognized arguments", None),
     ("experiment-negative-seed", ["experiment", "rl-amortised", "--seeds", "0", "-1"], "--seeds", None),
     ("experiment-design-seed", ["experiment", "design", "--seed", "-1"], "--seed", None),
     ("experiment-unknown-optimizer", ["experiment", "optimizers", "--optimizers", "nosuch"], "or ppo", None),

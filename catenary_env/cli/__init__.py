@@ -104,8 +104,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser, handlers = build_parser(_command_of(words))
     args, unknown = parser.parse_known_args(words)
     handler = handlers[args.command]
-    if unknown and not isinstance(handler, Unavailable):
-        parser.error(f"unrecognized arguments: {' '.join(unknown)}")
+    if unknown and not isinstance(handler, Unavailable):  # the command's, so its help is the one to see
+        prog = f"catenary {args.command}"
+        parser.exit(
+            EXIT_USAGE, f"{prog}: error: unrecognized arguments: {' '.join(unknown)} (see: {prog} --help)\n"
+        )
     raise_on_sigterm()
     with warnings.catch_warnings():
         warnings.showwarning = _warning_printer(args.command)
