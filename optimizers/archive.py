@@ -19,6 +19,8 @@ A run still going can be kept too, as a snapshot (:func:`snapshot_run`, ``...-<d
 rewritten at each snapshot): restored into a store that lacks the run, it is an interrupted run, which its
 study resumes from there (the snapshot's evaluations replayed, not simulated). A session that ends mid-run
 then loses only what came after its last snapshot. When the run finishes, its file replaces the snapshot.
+A run taken further elsewhere (another machine resumed it from the same snapshot and wrote a longer one)
+is carried further in a store that holds it unfinished, when restored from there.
 
 Examples
 --------
@@ -126,9 +128,11 @@ def _write(path: Path, run: dict[str, Any], rows: list[dict[str, Any]]) -> Path:
 
 
 def restore_runs(store: RunStore, folder: str | Path) -> int:
-    """Write into the store every archived run it does not hold, finished or (from its snapshot) not (a run
-    of the same configuration in the store, finished or not, is kept as it is); return how many were
-    written. Nothing happens for a missing folder.
+    """Write into the store every archived run it does not hold, finished or (from its snapshot) not, and
+    carry further each unfinished run it holds that the archive has further (a run resumed from the same
+    snapshot on another machine; :meth:`RunStore.add_run_rows`); a run of the same configuration in the
+    store is otherwise kept as it is. Return how many runs were written or carried further. Nothing
+    happens for a missing folder.
 
     Raises
     ------

@@ -449,9 +449,11 @@ class RunStore:
     ) -> int | None:
         """Write a run and its evaluations as :meth:`run_rows` gives them (from this store or another), in
         one transaction; return its id here: its ``run_id`` where that is free here (a store restored into
-        a new file numbers its runs as the one it came from did), else a new one. ``if_absent``: write
-        nothing and return None where the store holds a run of the same configuration (checked in the same
-        transaction, so that two processes restoring the same run into one store write it once).
+        a new file numbers its runs as the one it came from did), else a new one. ``if_absent``: where the
+        store holds a run of the same configuration (checked in the same transaction, so that two processes
+        restoring the same run into one store write it once), write nothing and return None, unless that
+        run is unfinished and the given one carries it further (:meth:`_extend`): then write what it adds
+        and return the stored run's id.
 
         Raises
         ------
@@ -468,9 +470,11 @@ class RunStore:
         connection.execute("BEGIN IMMEDIATE")
         try:
             config = RunConfig(*(run[f] for f in RunConfig._fields)) if if_absent else None  # type: ignore[arg-type]
-            if config is not None and self.find_run(config) is not None:
-                connection.rollback()
-                return None
+            stored = None if config is None else self.find_run(config)
+            if stored is not None:
+                extended = self._extend(stored, run, rows)
+                connection.commit() if extended else connection.rollback()
+                return stored if extended else None
             taken = (
                 "run_id" in run
                 and connection.execute("SELECT 1 FROM runs WHERE run_id = ?", (run["run_id"],)).fetchone()
@@ -483,6 +487,35 @@ class RunStore:
             connection.rollback()
             raise
         return run_id
+
+    def _extend(self, run_id: int, run: dict[str, object], rows: list[dict[str, object]]) -> bool:
+        """Carry an unfinished stored run further with the evaluations of the same run made further
+        elsewhere (another machine resumed it from the same snapshot): where every stored evaluation is in
+        ``rows`` as the same design with the same result, add the rest and, where ``run`` finished, its end.
+        Whether anything was written; a stored run that finished, holds an evaluation ``rows`` lacks or
+        differs from them (a branch) is kept as it is. Inside :meth:`add_run_rows`'s transaction."""
+        if self.stop_reason(run_id) is not None:
+            return False
+        given = {row["idx"]: row for row in rows}
+        same = ("design_key", "x", "speed_kmh", "sigma", "feasible", "reason")
+        cursor = self._connection.execute(
+            f"SELECT idx, {', '.join(same)} FROM evaluations WHERE run_id = ?", (run_id,)
+        )
+        held = set()
+        for idx, *values in cursor.fetchall():
+            row = given.get(idx)
+            if row is None or json.dumps([row[c] for c in same]) != json.dumps(values):  # NaN == NaN here
+                return False
+            held.add(idx)
+        new = [row for row in rows if row["idx"] not in held]
+        for row in new:
+            self._insert("evaluations", {"run_id": run_id, **row})
+        if run["stop_reason"] is not None:  # not finish_run: it would commit the transaction half-way
+            self._connection.execute(
+                "UPDATE runs SET finished_at = ?, stop_reason = ? WHERE run_id = ?",
+                (run["finished_at"], run["stop_reason"], run_id),
+            )
+        return bool(new) or run["stop_reason"] is not None
 
     def _insert(self, table: str, row: dict[str, object]) -> int:
         """Insert a row of named columns (checked against the schema by the caller); its rowid."""

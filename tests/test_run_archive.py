@@ -261,6 +261,65 @@ def test_a_run_killed_with_its_store_resumes_from_its_last_snapshot(tmp_path, mo
     assert not snapshot.exists() and len(list(archive.glob("*/*.json.gz"))) == 1
 
 
+def test_a_run_taken_further_on_another_machine_is_carried_further_where_it_stopped(tmp_path, monkeypatch):
+    """A snapshot of 10 evaluations is restored here and on another machine; that one resumes the run to 17
+    and writes its longer snapshot: restored here, it carries the run here to 17 (the same rows as there),
+    once; when that machine finishes the run, its file finishes the run here. A run here that went its own
+    way (an evaluation the other lacks or holds otherwise) is kept as it is."""
+    from optimizers import recorder
+    from optimizers.runner import optimize
+
+    monkeypatch.setattr(recorder, "SNAPSHOT_EVERY_S", 0.0)
+    simulate = synthetic.simulate_quadratic
+
+    def killed_after(n: int) -> None:
+        calls: list[object] = []
+
+        def simulated(problem, x, *args):
+            calls.append(x)
+            if len(calls) > n:
+                raise KeyboardInterrupt
+            return simulate(problem, x, *args)
+
+        monkeypatch.setattr(synthetic, "simulate_quadratic", simulated)
+
+    archive, elsewhere = tmp_path / "archive", tmp_path / "elsewhere"
+    run = {"problem": SYNTHETIC, "optimizer": "cma", "budget": 24, "seed": 3, "fidelity": "test"}
+    killed_after(10)
+    with pytest.raises(KeyboardInterrupt):
+        optimize(**run, store=tmp_path / "lost.sqlite", archive=archive)
+    shutil.copytree(archive, elsewhere)
+    here, there = RunStore(tmp_path / "here.sqlite"), RunStore(tmp_path / "there.sqlite")
+    assert restore_runs(here, archive) == restore_runs(there, elsewhere) == 1
+    killed_after(7)
+    with pytest.raises(KeyboardInterrupt):
+        optimize(**run, store=there, resume=True, archive=elsewhere)
+    (run_there,), (run_here,) = (store.runs() for store in (there, here))
+    assert len(there.run_rows(run_there["run_id"])[1]) == 17
+
+    assert restore_runs(here, elsewhere) == 1
+    assert here.run_rows(run_here["run_id"])[1] == there.run_rows(run_there["run_id"])[1]
+    assert restore_runs(here, elsewhere) == 0  # carried once
+    monkeypatch.setattr(synthetic, "simulate_quadratic", simulate)
+    optimize(**run, store=there, resume=True, archive=elsewhere)
+    assert restore_runs(here, elsewhere) == 1
+    assert here.run_rows(run_here["run_id"]) == (
+        {**there.run_rows(run_there["run_id"])[0], "run_id": run_here["run_id"]},
+        there.run_rows(run_there["run_id"])[1],
+    )
+
+    branched = RunStore(tmp_path / "branched.sqlite")
+    restore_runs(branched, archive)
+    (kept,) = branched.runs()
+    with branched._connection:  # the other machine's 5th design, held otherwise here
+        branched._connection.execute("UPDATE evaluations SET sigma = 1.0 WHERE idx = 4")
+    before = branched.run_rows(kept["run_id"])
+    assert restore_runs(branched, elsewhere) == 0
+    assert branched.run_rows(kept["run_id"]) == before
+    for store in (here, there, branched):
+        store.close()
+
+
 def test_two_lanes_restoring_one_archive_into_one_store_write_each_run_once(tmp_path):
     """The lanes of a protocol started together on a fresh checkout restore the same archive into the same
     new store: each run is written once."""
