@@ -161,8 +161,8 @@ def add_archive_option(parser: argparse.ArgumentParser, also: str = "") -> None:
     parser.add_argument(
         "--archive", type=Path, default=None, metavar="FOLDER",
         help="a run archive: restore its runs into the store first, and write each run into it as it "
-        "finishes, with a snapshot every ten minutes while it runs (one file a run, to commit as the study "
-        f"goes; docs/problems.md, 'Experiments'){also}",
+        "finishes, with a snapshot every ten minutes while it runs and when it is stopped (one file a run, "
+        f"to commit as the study goes; docs/problems.md, 'Experiments'){also}",
     )  # fmt: skip
 
 

@@ -125,7 +125,8 @@ class RunRecorder:
     archive : path, optional
         A run archive (:mod:`optimizers.archive`): the run is written into it when it finishes, and a
         snapshot of it every :data:`SNAPSHOT_EVERY_S` seconds while it goes on (a long run survives the
-        loss of its store: a fresh checkout restores the snapshot and resumes from there).
+        loss of its store: a fresh checkout restores the snapshot and resumes from there), and when it
+        stops unfinished (:meth:`keep_unfinished`, which its maker calls on the way out).
     """
 
     def __init__(
@@ -225,6 +226,17 @@ class RunRecorder:
         """Show the simulations spent, the evaluations and the best σ so far on the progress display."""
         best = "none feasible yet" if self._best_sigma is None else f"best sigma {self._best_sigma:.3f} N"
         self.progress.update(n_charged, f"{n_evaluations} evaluations, {best}", force)
+
+    def keep_unfinished(self) -> None:
+        """Where the run stops before it finishes (an error, Ctrl-C, SIGTERM) with an archive: write a last
+        snapshot of it there, so that the archive holds what the store does (the run resumes from there on
+        another checkout). Nothing for a finished run, or one with no evaluation yet."""
+        if (
+            self.archive is not None
+            and self.store.stop_reason(self.run_id) is None
+            and self.store.count_evaluations(self.run_id)
+        ):
+            snapshot_run(self.store, self.run_id, self.archive)
 
     def result(self, stop_reason: str) -> OptimizationResult:
         """Mark the run finished in the store and return its result."""

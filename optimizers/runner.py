@@ -126,6 +126,7 @@ def optimize(
             interval=progress_interval,
         )
         recorder = RunRecorder(run_store, run_id, config, space, "simulation", progress, resumed, archive)
+        stack.callback(recorder.keep_unfinished)  # interrupted: the archive keeps what it made
         backend = stack.enter_context(make_backend(n_workers, scheduler))
         engine = spec.optimizer_class(space, int(budget), int(seed), settings)  # type: ignore[call-arg]
         loop = _BatchEvaluator(grid_problem, space, recorder, backend, cap)

@@ -22,6 +22,7 @@ from optimizers.rl import (  # noqa: E402
     design_for_speed,
     train_design_policy,
 )
+from optimizers.store import RunStore  # noqa: E402
 from optimizers.synthetic import QuadraticProblem  # noqa: E402
 
 ENV_ID = "TestSpeedQuadraticDesign-v0"
@@ -287,6 +288,40 @@ def test_sac_resumes_an_interrupted_training(tmp_path):
         assert np.array_equal(
             design_for_speed(policy, PROBLEM, speed), design_for_speed(resumed_policy, PROBLEM, speed)
         )
+
+
+def test_an_interrupted_training_leaves_its_steps_in_the_archive_to_resume_from(tmp_path, monkeypatch):
+    """Ctrl-C in the middle of training, long before the periodic snapshot: the archive gets a last one,
+    and a fresh store restored from it resumes the run to the history of a run never interrupted."""
+    from optimizers.archive import restore_runs
+
+    _, whole = train_design_policy(SPEED_RANGE, PROBLEM, budget=72, seed=2, options=SMALL_SAC)
+    step, calls = SpeedQuadraticDesignEnv.step, []
+
+    def interrupted_at_40(self, action):
+        calls.append(action)
+        if len(calls) > 40:
+            raise KeyboardInterrupt
+        return step(self, action)
+
+    monkeypatch.setattr(SpeedQuadraticDesignEnv, "step", interrupted_at_40)
+    archive = tmp_path / "archive"
+    with pytest.raises(KeyboardInterrupt):
+        train_design_policy(
+            SPEED_RANGE, PROBLEM, budget=72, seed=2, options=SMALL_SAC, store=tmp_path / "lost.sqlite",
+            archive=archive,
+        )  # fmt: skip
+    (snapshot,) = archive.glob("*/*.partial.json.gz")
+    monkeypatch.setattr(SpeedQuadraticDesignEnv, "step", step)
+    with RunStore(tmp_path / "new.sqlite") as store:
+        assert restore_runs(store, archive) == 1
+        assert store.count_evaluations() == 40
+        _, resumed = train_design_policy(
+            SPEED_RANGE, PROBLEM, budget=72, seed=2, options=SMALL_SAC, store=store, resume=True,
+            archive=archive,
+        )  # fmt: skip
+    assert _comparable(resumed.history) == _comparable(whole.history)
+    assert not snapshot.exists()
 
 
 @pytest.mark.parametrize(

@@ -26,6 +26,7 @@ from optimizers.problem_registry import resolve_problem  # noqa: E402
 from optimizers.store import EXPORT_SOURCE, RunConfig, RunStore, StoreError  # noqa: E402
 
 SYNTHETIC = "synthetic-quadratic"
+SIMULATE = synthetic.simulate_quadratic  # as imported, whatever a test patches
 
 
 def _comparison(out: Path, **options) -> Path:
@@ -46,6 +47,20 @@ def _refuse_simulations(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(
         synthetic, "simulate_quadratic", lambda *a, **k: pytest.fail("a design was simulated")
     )
+
+
+def _interrupt_after(monkeypatch: pytest.MonkeyPatch, n: int) -> list[object]:
+    """Ctrl-C on the synthetic problem's simulation after ``n`` simulations; the designs it was asked."""
+    calls: list[object] = []
+
+    def interrupted(problem, x, *args):
+        calls.append(x)
+        if len(calls) > n:
+            raise KeyboardInterrupt
+        return SIMULATE(problem, x, *args)
+
+    monkeypatch.setattr(synthetic, "simulate_quadratic", interrupted)
+    return calls
 
 
 def test_a_fresh_store_restored_from_the_archive_resumes_without_simulating(tmp_path, monkeypatch):
@@ -231,15 +246,8 @@ def test_a_run_killed_with_its_store_resumes_from_its_last_snapshot(tmp_path, mo
 
     monkeypatch.setattr(recorder, "SNAPSHOT_EVERY_S", 0.0)
     whole = optimize(SYNTHETIC, "cma", 24, seed=3, fidelity="test")
-    simulate, calls = synthetic.simulate_quadratic, []
-
-    def killed_at_ten(problem, x, *args):
-        calls.append(x)
-        if len(calls) > 10:
-            raise KeyboardInterrupt
-        return simulate(problem, x, *args)
-
-    monkeypatch.setattr(synthetic, "simulate_quadratic", killed_at_ten)
+    simulate = synthetic.simulate_quadratic
+    calls = _interrupt_after(monkeypatch, 10)
     archive = tmp_path / "archive"
     with pytest.raises(KeyboardInterrupt):
         optimize(
@@ -261,6 +269,31 @@ def test_a_run_killed_with_its_store_resumes_from_its_last_snapshot(tmp_path, mo
     assert not snapshot.exists() and len(list(archive.glob("*/*.json.gz"))) == 1
 
 
+def test_a_run_interrupted_leaves_its_last_snapshot_in_the_archive(tmp_path, monkeypatch):
+    """Ctrl-C (or SIGTERM, which unwinds the same way) between two periodic snapshots: the run's way out
+    writes a last one, holding every evaluation the store has, and a finished run leaves no snapshot."""
+    from optimizers.runner import optimize
+
+    simulate = synthetic.simulate_quadratic
+    _interrupt_after(monkeypatch, 7)
+    archive = tmp_path / "archive"
+    run = {"problem": SYNTHETIC, "optimizer": "cma", "budget": 24, "seed": 3, "fidelity": "test"}
+    with pytest.raises(KeyboardInterrupt):  # the periodic snapshot (every ten minutes) never came
+        optimize(**run, store=tmp_path / "runs.sqlite", archive=archive)
+    (snapshot,) = archive.glob("*/*.partial.json.gz")
+    with RunStore(tmp_path / "runs.sqlite") as store:
+        (kept,) = store.runs()
+        rows = store.run_rows(kept["run_id"])[1]
+        assert len(rows) == 7
+        fresh = RunStore(":memory:")
+        restore_runs(fresh, archive)
+        assert fresh.run_rows(fresh.runs()[0]["run_id"])[1] == rows
+
+        monkeypatch.setattr(synthetic, "simulate_quadratic", simulate)
+        optimize(**run, store=store, resume=True, archive=archive)
+    assert not snapshot.exists() and len(list(archive.glob("*/*.json.gz"))) == 1
+
+
 def test_a_run_taken_further_on_another_machine_is_carried_further_where_it_stopped(tmp_path, monkeypatch):
     """A snapshot of 10 evaluations is restored here and on another machine; that one resumes the run to 17
     and writes its longer snapshot: restored here, it carries the run here to 17 (the same rows as there),
@@ -272,26 +305,15 @@ def test_a_run_taken_further_on_another_machine_is_carried_further_where_it_stop
     monkeypatch.setattr(recorder, "SNAPSHOT_EVERY_S", 0.0)
     simulate = synthetic.simulate_quadratic
 
-    def killed_after(n: int) -> None:
-        calls: list[object] = []
-
-        def simulated(problem, x, *args):
-            calls.append(x)
-            if len(calls) > n:
-                raise KeyboardInterrupt
-            return simulate(problem, x, *args)
-
-        monkeypatch.setattr(synthetic, "simulate_quadratic", simulated)
-
     archive, elsewhere = tmp_path / "archive", tmp_path / "elsewhere"
     run = {"problem": SYNTHETIC, "optimizer": "cma", "budget": 24, "seed": 3, "fidelity": "test"}
-    killed_after(10)
+    _interrupt_after(monkeypatch, 10)
     with pytest.raises(KeyboardInterrupt):
         optimize(**run, store=tmp_path / "lost.sqlite", archive=archive)
     shutil.copytree(archive, elsewhere)
     here, there = RunStore(tmp_path / "here.sqlite"), RunStore(tmp_path / "there.sqlite")
     assert restore_runs(here, archive) == restore_runs(there, elsewhere) == 1
-    killed_after(7)
+    _interrupt_after(monkeypatch, 7)
     with pytest.raises(KeyboardInterrupt):
         optimize(**run, store=there, resume=True, archive=elsewhere)
     (run_there,), (run_here,) = (store.runs() for store in (there, here))

@@ -185,7 +185,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="FOLDER",
         help="a run archive (one file a run, to commit or copy away): the runs it holds and the store "
         "lacks are restored into the store first, so --resume continues a run made elsewhere; the run goes "
-        "into it when it finishes, with a snapshot every ten minutes while it runs",
+        "into it when it finishes, with a snapshot every ten minutes while it runs and when it is stopped",
     )
     parser.add_argument(
         "--workers",

@@ -88,6 +88,7 @@ def train_design_policy(
         run_id, resumed = stack.enter_context(open_run(run_store, config, resume, start_if_none))
         progress = ProgressDisplay(f"{name} on {space.name}", int(budget), "simulations", quiet=quiet)
         recorder = RunRecorder(run_store, run_id, config, space, "env", progress, resumed, archive)
+        stack.callback(recorder.keep_unfinished)  # interrupted: the archive keeps what it made
         vec_env = _vector_env(env_spec, recorder, space, settings, _problem_keys(env_spec, problem))
         stack.callback(vec_env.close)
         # One torch thread: these small networks gain nothing from more, and a fixed thread count keeps
