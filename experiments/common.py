@@ -185,10 +185,12 @@ def study_parser(study: ModuleType, prog: str) -> argparse.ArgumentParser:
 
 
 def run_study(study: ModuleType, argv: Sequence[str] | None, prog: str) -> int:
-    """Parse a study's options, run it and print its report; 0."""
+    """Parse a study's options, run it and print its report (a study run in lanes, ``--lane``: what its
+    ``lane`` made); 0."""
     args = study_parser(study, prog).parse_args(argv)
     check_output_folder(args.out, "--out")
-    print(study.report(study.main(config_from(study.Config, args))))
+    config = config_from(study.Config, args)
+    print(study.lane(config) if getattr(config, "lane", False) else study.report(study.main(config)))
     return 0
 
 

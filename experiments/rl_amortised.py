@@ -30,6 +30,11 @@ Every run goes to the run store (``out/runs.sqlite`` by default, shared by the s
 it: a killed study started again replays what it stored (a policy is re-trained by replaying its stored
 steps, which gives the same policy) and simulates only the rest.
 
+Lanes (``--lane``): on a machine of many cores, several processes of the study over one store each make the
+runs that no other has made or is making (:meth:`~optimizers.store.RunStore.claim`), in the study's order,
+and write no tables; the study run again without ``--lane`` once they have all ended replays every run and
+writes them (``experiments/full_rl_lanes.sh``).
+
 Outputs (``out/rl/amortised/``): ``steps.csv`` (every training step), ``ga_runs.csv``, ``ga_curves.csv``
 (the GA's best σ after each simulation), ``designs.csv`` (every design simulated at each speed),
 ``ledger.csv``; ``amortised.md`` (tables), ``learning_curves.png``, ``ledger.png``; with ``--archive``,
@@ -50,10 +55,11 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 import math
 import shlex
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -63,18 +69,20 @@ import numpy as np
 from optimizers.archive import finished_runs, restore_runs
 from optimizers.base import EvaluationRecord, OptimizationResult
 from optimizers.ga import POPULATION_SIZES, GAOptions
-from optimizers.problem import Outcome
+from optimizers.problem import GridProblem, GridSpace, Outcome
 from optimizers.problem_registry import resolve_problem
 from optimizers.rl import (
     LEARNERS,
+    DesignPolicy,
     EnvSpec,
     LearnerOptions,
     design_for_speed,
+    policy_run_config,
     save_policy,
     train_design_policy,
 )
-from optimizers.runner import optimize
-from optimizers.store import RunStore
+from optimizers.runner import optimize, run_config
+from optimizers.store import RunConfig, RunStore
 from optimizers.synthetic import SYNTHETIC_PROBLEMS
 
 from . import protocol_cost
@@ -148,6 +156,8 @@ class Config:
         A run archive (:mod:`optimizers.archive`): its runs are restored into the store first, and each GA
         run and policy goes into it as it finishes, with a snapshot every ten minutes while it runs, so that
         a study of many hours is resumed on a fresh checkout from its last snapshot.
+    lane : bool
+        Make only the runs that no process has finished or is making now, and no tables (:func:`lane`).
     """
 
     full: bool = False
@@ -159,6 +169,7 @@ class Config:
     learners: tuple[str, ...] = tuple(LEARNERS)
     seeds: tuple[int, ...] = ()
     archive: Path | None = None
+    lane: bool = False
 
     def __post_init__(self) -> None:
         if not self.problems:
@@ -221,6 +232,88 @@ def check_starts_at_reference(problem: str) -> None:
             f"problem = {problem!r}: its bounds are not centred on its reference design, so a policy "
             "starting at action 0 would not start at the reference; use B1 or SW1"
         )
+
+
+def policy_env(config: Config, problem: str) -> EnvSpec:
+    """The env a speed-conditioned policy of the problem trains on."""
+    return EnvSpec(env_id(problem), None, SPEED_RANGE, config.fidelity, HELD_OUT)
+
+
+@dataclass(frozen=True)
+class StudyRun:
+    """One run of a study, for its lanes: its identity in the store, its name in words, and what makes (or
+    resumes) it in a store."""
+
+    identity: RunConfig
+    name: str
+    make: Callable[[RunStore], object]
+
+
+def study_runs(config: Config) -> list[StudyRun]:
+    """The study's runs in the order :func:`main` makes them: per problem, the GA runs, then the policies."""
+    runs = []
+    for problem in config.problems:
+        for speed, _ in config.speeds:
+            runs.append(ga_study_run(config, problem, speed, problem, f"ga on {problem} at {speed:g} km/h"))
+        for learner in config.learners:
+            for seed in config.seeds:
+                name = f"{learner} on {problem} seed {seed}"
+                runs.append(
+                    policy_study_run(config, policy_env(config, problem), problem, learner, seed, name)
+                )
+    return runs
+
+
+def ga_study_run(
+    config: Config, problem: str | GridProblem, speed: float, population_of: str, name: str
+) -> StudyRun:
+    """The GA run of a study (:func:`ga_run`) as a run of its lanes."""
+    space = GridSpace.from_problem(resolve_problem(problem))
+    options = config.ga_options(population_of)
+    identity = run_config("ga", space, config.ga_budget, 0, speed, config.fidelity, options)
+    make = functools.partial(ga_run, config=config, problem=problem, speed=speed, population_of=population_of)
+    return StudyRun(identity, name, make)
+
+
+def policy_study_run(
+    config: Config, env: EnvSpec, problem: str | GridProblem, learner: str, seed: int, name: str
+) -> StudyRun:
+    """A policy of a study (:func:`train_policy`) as a run of its lanes."""
+    space = GridSpace.from_problem(resolve_problem(problem))
+    options = config.learner_options(learner)
+    identity = policy_run_config(env, space, config.policy_budget, seed, options)
+    make = functools.partial(
+        train_policy, config=config, env=env, problem=problem, learner=learner, seed=seed
+    )
+    return StudyRun(identity, name, make)
+
+
+def make_free_runs(config: Config, runs: Sequence[StudyRun]) -> str:
+    """A lane of a study: make, in order, the runs that no process has finished or is making now; what it
+    made and left to the others, in words. Each run is held while it is made
+    (:meth:`~optimizers.store.RunStore.claim`), so the lanes over one store never make a run twice."""
+    store_path = config.store or Path(config.out) / STORE
+    made, left = [], []
+    with RunStore(store_path) as store:
+        restore_archive(config, store, store_path)
+        for run in runs:
+            with store.claim(run.identity) as mine:
+                run_id = store.find_run(run.identity)
+                if mine and (run_id is None or store.stop_reason(run_id) is None):
+                    run.make(store)
+                    made.append(run.name)
+                else:
+                    left.append(run.name)
+    return (
+        f"This lane made {len(made)} run(s): {'; '.join(made) or 'none'}. {len(left)} were made, or are "
+        f"being made, by other processes: {'; '.join(left) or 'none'}. Once every lane has ended, run the "
+        "study again without --lane for its tables (it replays every run)."
+    )
+
+
+def lane(config: Config) -> str:
+    """``--lane``: :func:`make_free_runs` over the study's runs."""
+    return make_free_runs(config, study_runs(config))
 
 
 def main(config: Config) -> Path:
@@ -312,16 +405,24 @@ def _ga_runs(store: RunStore, config: Config, problem: str, tables: dict[str, li
     """A GA run at each speed of the table: its result, its best σ after each simulation, its optimum."""
     optima = []
     for speed, _ in config.speeds:
-        result = optimize(
-            problem, "ga", config.ga_budget, 0, speed_kmh=speed, fidelity=config.fidelity,
-            options=config.ga_options(problem), store=store, resume=True, start_if_none=True,
-            n_workers=config.workers, quiet=not config.full, archive=config.archive,
-        )  # fmt: skip
+        result = ga_run(store, config=config, problem=problem, speed=speed, population_of=problem)
         tables["ga"].append(ga_row(problem, speed, config, result, problem))
         tables["curves"].extend(best_so_far(problem, speed, result))
         if result.best_x is not None:
             optima.append(("ga", 0, speed, tuple(result.best_x)))
     _simulate(store, config, problem, optima, tables["designs"])
+
+
+def ga_run(
+    store: RunStore, *, config: Config, problem: str | GridProblem, speed: float, population_of: str
+) -> OptimizationResult:
+    """Make (or resume) the GA run of the problem (a name, or a problem) at a speed, km/h, with the
+    population of the problem named ``population_of``."""
+    return optimize(
+        problem, "ga", config.ga_budget, 0, speed_kmh=speed, fidelity=config.fidelity,
+        options=config.ga_options(population_of), store=store, resume=True, start_if_none=True,
+        n_workers=config.workers, quiet=not config.full, archive=config.archive,
+    )  # fmt: skip
 
 
 def ga_row(
@@ -361,16 +462,9 @@ def _policy(
     tables: dict[str, list[dict[str, Any]]],
 ) -> None:
     """Train (or resume) one policy, save it with the command that reproduces it, and simulate its designs."""
-    from catenary_env.envs import register_envs
-
-    register_envs()
-    spec = EnvSpec(env_id(problem), None, SPEED_RANGE, config.fidelity, HELD_OUT)
-    options = config.learner_options(learner)
+    env = policy_env(config, problem)
+    policy, result = train_policy(store, config=config, env=env, problem=problem, learner=learner, seed=seed)
     design_problem = resolve_problem(problem)
-    policy, result = train_design_policy(
-        spec, design_problem, config.policy_budget, seed, options=options, store=store, resume=True,
-        start_if_none=True, quiet=not config.full, archive=config.archive,
-    )  # fmt: skip
     tables["steps"].extend(step_rows(store, problem, learner, seed, result))
     path = folder / "policies" / f"{learner}-{problem}-seed{seed}.zip"
     command = reproduce_command(config, store_path, problem, learner, seed, path)
@@ -383,6 +477,19 @@ def _policy(
     _simulate(store, config, problem, designs, tables["designs"])
     best = "no feasible design" if result.best_sigma is None else f"best σ met {result.best_sigma:.3f} N"
     print(f"{learner} on {problem} seed {seed}: {best}", file=sys.stderr, flush=True)
+
+
+def train_policy(
+    store: RunStore, *, config: Config, env: EnvSpec, problem: str | GridProblem, learner: str, seed: int
+) -> tuple[DesignPolicy, OptimizationResult]:
+    """Train (or resume) the policy of a learner and seed on an env of the problem (a name, or a problem)."""
+    from catenary_env.envs import register_envs
+
+    register_envs()
+    return train_design_policy(
+        env, resolve_problem(problem), config.policy_budget, seed, options=config.learner_options(learner),
+        store=store, resume=True, start_if_none=True, quiet=not config.full, archive=config.archive,
+    )  # fmt: skip
 
 
 def step_rows(
@@ -493,7 +600,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def add_training_arguments(parser: argparse.ArgumentParser, learners: tuple[str, ...]) -> None:
     """The options of the policies' training and the study's files, shared with :mod:`experiments.rl_tension`:
     ``--learners`` (default ``learners``), ``--seeds``, ``--envs``, ``--workers``, ``--out``, ``--store``,
-    ``--archive``."""
+    ``--archive``, ``--lane``."""
     parser.add_argument(
         "--learners", nargs="+", default=list(learners), choices=list(LEARNERS), metavar="NAME",
         help=f"the RL learners, of {' '.join(LEARNERS)} (default: {' '.join(learners)})",
@@ -510,6 +617,11 @@ def add_training_arguments(parser: argparse.ArgumentParser, learners: tuple[str,
     add_out_option(parser)
     add_store_option(parser)
     add_archive_option(parser)
+    parser.add_argument(
+        "--lane", action="store_true",
+        help="one lane of several processes over one store: make only the runs that no other has made or "
+        "is making, and no tables (run the study again without --lane when every lane has ended)",
+    )  # fmt: skip
 
 
 def cli(argv: list[str] | None = None) -> int:

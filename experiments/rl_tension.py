@@ -37,8 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from optimizers.catenary_adapter import CatenaryProblem, catenary_problem
-from optimizers.rl import EnvSpec, design_for_speed, load_policy, save_policy, train_design_policy
-from optimizers.runner import optimize
+from optimizers.rl import EnvSpec, design_for_speed, load_policy, save_policy
 from optimizers.store import RunStore
 
 from . import rl_amortised, rl_analysis
@@ -151,15 +150,31 @@ def _simulate(
         )  # fmt: skip
 
 
+def study_runs(config: Config) -> list[rl_amortised.StudyRun]:
+    """The study's runs in the order :func:`main` makes them: the GA runs, then the policies."""
+    runs = [
+        rl_amortised.ga_study_run(config, _at(tension), SPEED_KMH, PROBLEM, f"ga on {label(tension)}")
+        for tension, _ in config.tensions
+    ]
+    for learner in config.learners:
+        for seed in config.seeds:
+            name = f"{learner} on {PROBLEM} over tensions, seed {seed}"
+            runs.append(rl_amortised.policy_study_run(config, env_spec(config), PROBLEM, learner, seed, name))
+    return runs
+
+
+def lane(config: Config) -> str:
+    """``--lane``: :func:`rl_amortised.make_free_runs` over the study's runs."""
+    return rl_amortised.make_free_runs(config, study_runs(config))
+
+
 def _ga_runs(store: RunStore, config: Config, tables: dict[str, list[dict[str, Any]]]) -> None:
     """A GA run at each tension of the table, at :data:`SPEED_KMH`."""
     optima = []
     for tension, _ in config.tensions:
-        result = optimize(
-            _at(tension), "ga", config.ga_budget, 0, speed_kmh=SPEED_KMH, fidelity=config.fidelity,
-            options=config.ga_options(PROBLEM), store=store, resume=True, start_if_none=True,
-            n_workers=config.workers, quiet=not config.full, archive=config.archive,
-        )  # fmt: skip
+        result = rl_amortised.ga_run(
+            store, config=config, problem=_at(tension), speed=SPEED_KMH, population_of=PROBLEM
+        )
         tables["ga"].append(rl_amortised.ga_row(label(tension), SPEED_KMH, config, result, PROBLEM))
         tables["curves"].extend(rl_amortised.best_so_far(label(tension), SPEED_KMH, result))
         if result.best_x is not None:
@@ -178,10 +193,9 @@ def _policy(
 ) -> None:
     """Train (or resume) one policy, save it with the command that reproduces it, simulate its designs."""
     problem = catenary_problem(PROBLEM)
-    policy, result = train_design_policy(
-        env_spec(config), problem, config.policy_budget, seed, options=config.learner_options(learner),
-        store=store, resume=True, start_if_none=True, quiet=not config.full, archive=config.archive,
-    )  # fmt: skip
+    policy, result = rl_amortised.train_policy(
+        store, config=config, env=env_spec(config), problem=problem, learner=learner, seed=seed
+    )
     tables["steps"].extend(rl_amortised.step_rows(store, PROBLEM, learner, seed, result))
     path = folder / "policies" / f"{learner}-{PROBLEM}-tension-seed{seed}.zip"
     command = reproduce_command(config, store_path, learner, seed, path)

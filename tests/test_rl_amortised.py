@@ -91,6 +91,51 @@ def test_the_study_runs_on_the_synthetic_problem_and_replays(tmp_path, monkeypat
     assert "## rl:" not in report and "`catenary experiment rl`," in report  # not run yet
 
 
+def test_lanes_over_one_store_make_each_run_once_and_leave_the_tables_to_the_study(tmp_path, monkeypatch):
+    """``--lane``: a run another process is making (its claim held here through a file of its own) is left
+    to it, and so is a run finished already; each run is made by one lane, and the study afterwards writes
+    the tables of every run, replaying them."""
+    import fcntl
+
+    from experiments.common import run_study
+    from optimizers.store import RunStore
+
+    config = rl_amortised.Config(
+        out=tmp_path, problems=("synthetic-speed-quadratic",), envs=1, workers=1, seeds=(0, 1), lane=True
+    )
+    runs = rl_amortised.study_runs(config)
+    assert [r.name for r in runs] == [
+        "ga on synthetic-speed-quadratic at 230 km/h", "ga on synthetic-speed-quadratic at 260 km/h",
+        *(f"{name} on synthetic-speed-quadratic seed {seed}" for name in ("ppo", "sac") for seed in (0, 1)),
+    ]  # fmt: skip
+    store = RunStore(tmp_path / "runs.sqlite")
+    claim = Path(store._claim_file(runs[3].identity))
+    claim.parent.mkdir()
+    held = claim.open("a")  # noqa: SIM115 (closed below)
+    fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)  # another lane is making PPO's seed 1
+    text = rl_amortised.lane(config)
+    assert text.startswith("This lane made 5 run(s)") and "1 were made, or are being made, by other" in text
+    assert store.find_run(runs[3].identity) is None
+    held.close()
+    assert rl_amortised.lane(config).startswith(
+        "This lane made 1 run(s): ppo on synthetic-speed-quadratic seed 1."
+    )
+    assert all(store.stop_reason(store.find_run(r.identity)) == "budget" for r in runs)
+    assert not (tmp_path / "rl" / "amortised" / "steps.csv").exists()  # a lane writes no table
+
+    def progress() -> list[dict[str, object]]:  # (a replayed run is marked finished again: its time moves)
+        return [{k: v for k, v in run.items() if k != "finished_at"} for run in store.run_progress()]
+
+    made = progress()
+    argv = ["--problems", "synthetic-speed-quadratic", "--envs", "1", "--workers", "1", "--seeds", "0", "1"]
+    assert run_study(rl_amortised, [*argv, "--out", str(tmp_path)], "rl-amortised") == 0
+    assert len(read_csv(tmp_path / "rl" / "amortised" / "steps.csv")) == 4 * config.policy_budget
+    now = progress()
+    assert now[: len(made)] == made  # every run replayed, none made again
+    assert all(run["budget"] == 0 for run in now[len(made) :])  # only the table's designs simulated
+    store.close()
+
+
 @pytest.mark.slow  # the real quick study: PPO and SAC on B1 on two envs, GA runs at 230 and 260 km/h
 def test_rl_amortised_quick(tmp_path, monkeypatch):
     _check_study(rl_amortised.Config(out=tmp_path), tmp_path, monkeypatch)

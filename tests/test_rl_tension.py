@@ -19,6 +19,7 @@ from experiments.common import read_csv  # noqa: E402
 from optimizers.catenary_adapter import catenary_problem  # noqa: E402
 from optimizers.problem import GridSpace  # noqa: E402
 from optimizers.rl import load_policy  # noqa: E402
+from optimizers.store import RunStore  # noqa: E402
 
 
 def test_the_ledger_counts_one_policy_against_a_ga_run_per_tension():
@@ -85,6 +86,8 @@ def test_rl_tension_quick(tmp_path, monkeypatch):
     assert len({r["x_m"] for r in speed_only}) == 1  # one design, whatever the tension
     assert "| 22 | yes | sac speed only |" in text
     assert {r["learner"] for r in read_csv(folder / "ledger.csv")} == {"sac"}
+    with RunStore(tmp_path / "runs.sqlite") as store:  # the runs its lanes (--lane) would make
+        assert all(store.stop_reason(store.find_run(r.identity)) for r in rl_tension.study_runs(config))
 
     def refuse(*args, **kwargs):
         raise AssertionError("a design was simulated")
