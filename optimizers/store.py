@@ -452,8 +452,8 @@ class RunStore:
         a new file numbers its runs as the one it came from did), else a new one. ``if_absent``: where the
         store holds a run of the same configuration (checked in the same transaction, so that two processes
         restoring the same run into one store write it once), write nothing and return None, unless that
-        run is unfinished and the given one carries it further (:meth:`_extend`): then write what it adds
-        and return the stored run's id.
+        run is unfinished, no process is making it now (:meth:`being_made`) and the given one carries it
+        further (:meth:`_extend`): then write what it adds and return the stored run's id.
 
         Raises
         ------
@@ -472,7 +472,8 @@ class RunStore:
             config = RunConfig(*(run[f] for f in RunConfig._fields)) if if_absent else None  # type: ignore[arg-type]
             stored = None if config is None else self.find_run(config)
             if stored is not None:
-                extended = self._extend(stored, run, rows)
+                # (not a run another process is making now: it would write the same evaluations)
+                extended = not self.being_made(config) and self._extend(stored, run, rows)
                 connection.commit() if extended else connection.rollback()
                 return stored if extended else None
             taken = (

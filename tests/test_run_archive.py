@@ -299,6 +299,8 @@ def test_a_run_taken_further_on_another_machine_is_carried_further_where_it_stop
     and writes its longer snapshot: restored here, it carries the run here to 17 (the same rows as there),
     once; when that machine finishes the run, its file finishes the run here. A run here that went its own
     way (an evaluation the other lacks or holds otherwise) is kept as it is."""
+    import fcntl
+
     from optimizers import recorder
     from optimizers.runner import optimize
 
@@ -319,6 +321,11 @@ def test_a_run_taken_further_on_another_machine_is_carried_further_where_it_stop
     (run_there,), (run_here,) = (store.runs() for store in (there, here))
     assert len(there.run_rows(run_there["run_id"])[1]) == 17
 
+    claim = Path(here._claim_file(RunConfig(*(run_here[f] for f in RunConfig._fields))))
+    claim.parent.mkdir(exist_ok=True)
+    with claim.open("a") as held:  # a process making the run here now: it is left to that process
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        assert restore_runs(here, elsewhere) == 0
     assert restore_runs(here, elsewhere) == 1
     assert here.run_rows(run_here["run_id"])[1] == there.run_rows(run_there["run_id"])[1]
     assert restore_runs(here, elsewhere) == 0  # carried once
