@@ -293,6 +293,7 @@ def make_free_runs(config: Config, runs: Sequence[StudyRun]) -> str:
     made and left to the others, in words. Each run is held while it is made
     (:meth:`~optimizers.store.RunStore.claim`), so the lanes over one store never make a run twice."""
     store_path = config.store or Path(config.out) / STORE
+    store_path.parent.mkdir(parents=True, exist_ok=True)  # a fresh --out, as main's study folder makes it
     made, left = [], []
     with RunStore(store_path) as store:
         restore_archive(config, store, store_path)
