@@ -191,7 +191,7 @@ def test_every_option_of_every_command_and_study_is_explained():
     parser, _ = cli.build_parser()
     action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
     parsers = [*action.choices.items(), *_study_parsers()]
-    assert len(parsers) == 12 + 11  # the commands and the studies
+    assert len(parsers) == 12 + 12  # the commands and the studies
     for name, command in parsers:
         for option in command._actions:
             if not isinstance(option, argparse._HelpAction):

@@ -28,6 +28,9 @@ STUDIES = {
     "validation": Study("validation", "EN 50318:2002 table and figure at 250 and 300 km/h"),
     "ablation": Study("ablation", "one modelling choice at a time: EN 50318:2002 quantities, benchmark σ"),
     "convergence": Study("convergence", "mesh and time-step convergence of σ (benchmark preset, 300 km/h)"),
+    "time-step": Study(
+        "time_step", "Newmark against every mode integrated exactly: can a passage take a longer step?"
+    ),
     "presag": Study("presag", "σ against pre-sag on both catenaries, and the best pre-sag against speed"),
     "design": Study(
         "design_studies", "the six GA design studies, static analysis of the optima, σ against speed"
