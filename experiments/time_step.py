@@ -184,20 +184,22 @@ def modal_passage(system: LinearSystem, modes: Modes, dt: float, passage: Passag
     return trajectory(history, started.time, (started.position,), system.static.layout.support_x)
 
 
-def _settle(  # noqa: ANN202
-    contact,
-    slack,
-    gap_known,
-    compliance,
-    g_dz,
-    base,
-    force_per_contact,
-    force_per_pair,
-    kh,  # noqa: ANN001
-):
+def _settle(
+    contact: np.ndarray,
+    slack: np.ndarray,
+    gap_known: np.ndarray,
+    compliance: float,
+    g_dz: np.ndarray,
+    base: np.ndarray,
+    force_per_contact: np.ndarray,
+    force_per_pair: np.ndarray,
+    kh: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool]:
     """The step's contact force and slack droppers by the active-set rules of docs/model.md ('One small
     problem per step'), where a dropper's force has its own compliances (its rate part differs from the
-    elongation's, so the project's ``settle``, written for Newmark, does not apply as it is)."""
+    elongation's, so the project's ``settle``, written for Newmark, does not apply as it is). Returns the
+    contact and slack states, f (1,), the slack droppers and their forces λ, every dropper's linear force
+    and whether the iteration settled."""
     slack = slack.copy()
     for iteration in range(MAX_ACTIVE_SET_ITERATIONS):
         idx = np.flatnonzero(slack)
