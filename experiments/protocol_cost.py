@@ -52,7 +52,9 @@ def run_cost(run: dict[str, Any], rows: list[dict[str, Any]]) -> dict[str, Any]:
     timed = any(r["source"] != "export" for r in rows)
     run_time = None
     if timed:
-        stamps = [_seconds(run["created_at"])] + [_seconds(r["created_at"]) for r in rows]
+        # In time order: a generation's designs are stamped as its workers finish them, and a generation
+        # interrupted and resumed holds designs of both sessions, so the order of the rows is not the clock's.
+        stamps = sorted([_seconds(run["created_at"])] + [_seconds(r["created_at"]) for r in rows])
         gaps = [b - a for a, b in zip(stamps[:-1], stamps[1:], strict=True)]
         run_time = sum(gap for gap in gaps if gap <= INTERRUPTION)
     problem = str(run["problem"]).split("@")[0]

@@ -358,11 +358,11 @@ def write_tables(config: Config, folder: Path, tables: dict[str, list[dict[str, 
     stamp_study(folder, catenaries_of(config.problems))
 
 
-def write_cost(archive: Path, folder: Path, cores: int) -> None:
+def write_cost(archive: Path, folder: Path, cores: int, title: str = "The amortised RL study's cost") -> None:
     """``cost.md``: what the archive's finished runs cost (:mod:`experiments.protocol_cost`); each run
     held ``cores`` cores (its envs, or as many GA workers)."""
     if finished_runs(archive):
-        text = protocol_cost.report(archive, "The amortised RL study's cost", cores=cores)
+        text = protocol_cost.report(archive, title, cores=cores)
         (folder / "cost.md").write_text(text, encoding="utf-8")
 
 

@@ -121,7 +121,7 @@ def main(config: Config) -> Path:
     rl_amortised.write_tables(config, folder, tables)
     report(folder)
     if config.archive is not None:
-        rl_amortised.write_cost(Path(config.archive), folder, config.envs)
+        rl_amortised.write_cost(Path(config.archive), folder, config.envs, "The tension study's cost")
     return folder
 
 

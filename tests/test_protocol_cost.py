@@ -51,6 +51,21 @@ def test_the_cost_leaves_out_interruptions_cached_designs_and_untimed_run_times(
     assert "Run time of the 1 runs with time stamps (the others were rebuilt from an export)" in text
 
 
+def test_a_generation_resumed_in_another_session_counts_its_work_once(tmp_path):
+    """A GA generation interrupted and resumed holds designs of both sessions, in the rows' order but not the
+    clock's (and parallel workers stamp a generation's designs out of order): the run time is the work of each
+    session, never negative."""
+    rows = [
+        _row(0, "2026-12-04T16:14:12+00:00", 1.0),
+        _row(1, "2026-12-04T18:46:02+00:00", 1.0),  # resumed 2.5 h later
+        _row(2, "2026-12-04T16:14:11+00:00", 1.0),
+        _row(3, "2026-12-04T18:46:03+00:00", 1.0),
+    ]
+    write_run_file(tmp_path, _run("ga", "B1@abc", 0, "2026-12-04T16:14:10+00:00"), rows)
+    (cost,) = (protocol_cost.run_cost(*r) for r in finished_runs(tmp_path))
+    assert cost["run_time_s"] == 3.0  # 16:14:10-12 and 18:46:02-03
+
+
 def test_a_run_on_two_cores_reports_its_wall_time_and_core_time(tmp_path):
     """The amortised RL study's runs step two envs at once: the run time is wall time on two cores, twice
     that in core-hours, beside the simulations' own (core) time."""
