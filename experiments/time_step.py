@@ -250,24 +250,16 @@ def main(config: Config) -> Path:
                     tr = modal_passage(system, modes, dt, passage)
             except Unstable as err:
                 print(f"  {integrator} {dt * 1e3:g} ms: unstable ({err})", flush=True)
-                rows.append(dict.fromkeys(_COLUMNS, np.nan) | {"catenary": preset, "integrator": integrator,
-                            "time_step_s": dt, "stable": 0})  # fmt: skip
+                rows.append(_row(preset, integrator, dt, stable=0))
                 continue
             st = passage_statistics(tr, window, filtered_contact_force(tr))
-            row = {
-                "catenary": preset,
-                "integrator": integrator,
-                "time_step_s": dt,
-                "stable": 1,
-                "n_dofs": system.n_dofs,
-                "sigma_N": st.std,
-                "mean_N": st.mean,
-                "actual_max_N": st.actual_max,
-                "actual_min_N": st.actual_min,
-                "slack_steps": tr.slack_steps,
-                "wall_time_s": time.perf_counter() - start,
-            }
-            rows.append(dict.fromkeys(_COLUMNS, np.nan) | row)
+            rows.append(
+                _row(
+                    preset, integrator, dt, stable=1, n_dofs=system.n_dofs, sigma_N=st.std, mean_N=st.mean,
+                    actual_max_N=st.actual_max, actual_min_N=st.actual_min, slack_steps=tr.slack_steps,
+                    wall_time_s=time.perf_counter() - start,
+                )
+            )  # fmt: skip
             print(f"  {integrator} {dt * 1e3:g} ms: σ = {st.std:.3f} N", flush=True)
     _compare(rows)
     folder = study_dir(config.out, NAME)
@@ -282,6 +274,13 @@ _COLUMNS = (
     "actual_min_N", "slack_steps", "wall_time_s", "sigma_vs_finest_percent",
     "extremes_vs_finest_percent_of_mean", "sigma_vs_1ms_percent", "extremes_vs_1ms_percent_of_mean",
 )  # fmt: skip
+
+
+def _row(catenary: str, integrator: str, time_step: float, **values: float) -> dict:
+    """A row of ``time_step.csv``: every column, NaN where ``values`` give none (an unstable run's figures,
+    and the comparisons until :func:`_compare`)."""
+    given = {"catenary": catenary, "integrator": integrator, "time_step_s": time_step, **values}
+    return dict.fromkeys(_COLUMNS, np.nan) | given
 
 
 def _compare(rows: list[dict]) -> None:
