@@ -308,9 +308,9 @@ def _compare(rows: list[dict]) -> None:
 
 def report(folder: Path) -> str:
     """Markdown table from the CSV (no simulation)."""
-    rows = [r for r in read_csv(folder / "time_step.csv") if r["stable"]]
+    rows = read_csv(folder / "time_step.csv")
     table = markdown_table(
-        rows,
+        [r for r in rows if r["stable"]],
         [
             ("catenary", "catenary", "s"),
             ("integrator", "integration", "s"),
@@ -323,9 +323,10 @@ def report(folder: Path) -> str:
             ("wall_time_s", "time (s)", ".1f"),
         ],
     )
-    unstable = [r for r in read_csv(folder / "time_step.csv") if not r["stable"]]
     notes = "".join(
-        f"\n{r['catenary']}, {r['integrator']} at {r['time_step_s']:g} s: unstable." for r in unstable
+        f"\n{r['catenary']}, {r['integrator']} at {r['time_step_s']:g} s: unstable."
+        for r in rows
+        if not r["stable"]
     )
     (folder / "time_step.md").write_text(table + "\n" + notes + "\n", encoding="utf-8")
     return table
