@@ -70,6 +70,21 @@ def test_interior_spans_share_one_eigensolution(system):
     assert len(reduced.types) == 3
 
 
+def test_a_type_s_spans_share_its_representative_s_droppers(system):
+    """Every span of a type stands for the type's representative, its droppers too: the loops read one
+    set of rows per type, and each span's own rows (its B on its own DOFs) are the representative's."""
+    reduced = reduce_system(system, 200.0)
+    assert np.array_equal(reduced.span_type[reduced.representative], np.arange(len(reduced.types)))
+    d = span_modes.prepare_reduced(reduced, DT, near_spans=1).arrays
+    B = system.dropper_elongation.toarray()
+    for s, t in enumerate(reduced.span_type):
+        q = np.arange(d.dropper_start[s], d.dropper_start[s + 1])
+        m = reduced.types[t].n_modes
+        np.testing.assert_array_equal(d.dropper_q[q], d.type_dropper_q[t, : q.size])
+        own = B[np.ix_(q, reduced.internal[s])] @ reduced.types[t].shapes  # this span's own rows
+        np.testing.assert_allclose(d.dropper_q_plain[q, :m], own, rtol=0, atol=1e-9 * np.abs(own).max())
+
+
 def test_reduced_matrices_are_the_projection(system):
     reduced = reduce_system(system, 150.0)
     T = reduced.rows(np.arange(system.n_dofs))

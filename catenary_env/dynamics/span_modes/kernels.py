@@ -351,7 +351,7 @@ def run_steps(d, points, st, configuration, first, stop):  # pragma: no cover - 
             for j in range(nc):
                 work_b[d.coupled[s, j]] += sums[j]
             first_q = d.dropper_start[s]
-            _rows_dot(d.dropper_q, first_q, d.dropper_start[s + 1] - first_q, e_s, m, dl_known[first_q:])
+            _rows_dot(d.type_dropper_q[t], 0, d.dropper_start[s + 1] - first_q, e_s, m, dl_known[first_q:])
         _band_solve((d.schur_columns[c], d.schur_rows[c], d.schur_inverse_diagonal[c]), work_b, x_b)
         for s in range(n_spans):
             t = d.span_type[s]

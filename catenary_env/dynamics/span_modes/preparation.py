@@ -74,6 +74,7 @@ class SpanModeArrays(NamedTuple):
     dropper_span: np.ndarray  # (D,) in order of span
     dropper_start: np.ndarray  # (S + 1,) span s's droppers are dropper_start[s] .. dropper_start[s + 1] - 1
     dropper_q: np.ndarray  # (D, m) B_q D⁻¹
+    type_dropper_q: np.ndarray  # (T, K, m) the same, a span type's droppers
     dropper_q_plain: np.ndarray  # (D, m) B_q
     dropper_c: np.ndarray  # (D, n_c) B_c
     dropper_h: np.ndarray  # (C, D, n_c) B_q D⁻¹ M_qc over the kept modes
@@ -224,34 +225,45 @@ def _mode_arrays(reduced: ReducedSystem, c_k: float, c_m: float) -> dict[str, np
 
 
 def _dropper_arrays(reduced: ReducedSystem, inv_d: np.ndarray) -> dict[str, np.ndarray]:
-    """Each dropper's row of B T, split into its span's modes (B_q) and coupled interface (B_c)."""
+    """Each dropper's row of B T, split into its span's modes (B_q) and coupled interface (B_c).
+
+    A span stands for its type's representative (:class:`.reduction.ReducedSystem`), and so do its
+    droppers: their rows are the representative's, the same for every span of the type, so that the
+    compiled loop reads them once per type (``type_dropper_q``: some 25 kB a type, which stay in the
+    cache, where a row per dropper of the section is half a megabyte at 20 spans and grows with it)."""
     system = reduced.system
     B = system.dropper_elongation.tocsr()
     d_span = system.static.layout.dropper_span.astype(np.int64)
     if np.any(np.diff(d_span) < 0):
         raise AssertionError("the droppers are not in order of span")  # a bug, never a user error
-    d_q = np.zeros((d_span.size, inv_d.shape[1]))
-    d_c = np.zeros((d_span.size, max(c.size for c in reduced.coupled)))
+    start = np.searchsorted(d_span, np.arange(len(reduced.internal) + 1)).astype(np.int64)
     row_size = np.asarray(abs(B).sum(axis=1)).ravel()
-    basis = {}  # per span type: T on its internal and coupled interface DOFs, [[Φ, Ψ], [0, I]]
+    B_span = []  # each span's droppers' rows of B on its internal, then its coupled interface DOFs
     for s, dofs in enumerate(reduced.internal):
-        q = np.flatnonzero(d_span == s)
-        modes = reduced.modes_of(s)
-        c = reduced.coupled[s]
-        B_s = submatrix(B, q, np.r_[dofs, reduced.interface[c]]).toarray()  # internal, then coupled
-        if not np.allclose(np.abs(B_s).sum(axis=1), row_size[q], rtol=1e-12, atol=0.0):
+        q = np.arange(start[s], start[s + 1])
+        B_span.append(submatrix(B, q, np.r_[dofs, reduced.interface[reduced.coupled[s]]]))
+        if not np.allclose(np.abs(B_span[s].toarray()).sum(axis=1), row_size[q], rtol=1e-12, atol=0.0):
             raise AssertionError("a dropper's row reaches outside its span")  # a bug, never a user error
-        t, m = reduced.span_type[s], modes.n_modes
-        if t not in basis:
-            basis[t] = np.block([[modes.shapes, modes.constraint], [np.zeros((c.size, m)), np.eye(c.size)]])
-        rows = B_s @ basis[t]
-        d_q[q, :m], d_c[q, : c.size] = rows[:, :m], rows[:, m:]
+    n_types, m_max = inv_d.shape
+    type_q = np.zeros((n_types, int(np.diff(start).max(initial=0)), m_max))
+    type_c = np.zeros((n_types, type_q.shape[1], max(c.size for c in reduced.coupled)))
+    for t, r in enumerate(reduced.representative):
+        modes, n_c = reduced.types[t], reduced.coupled[r].size
+        basis = np.block([[modes.shapes, modes.constraint], [np.zeros((n_c, modes.n_modes)), np.eye(n_c)]])
+        rows = B_span[r].toarray() @ basis
+        type_q[t, : rows.shape[0], : modes.n_modes] = rows[:, : modes.n_modes]
+        type_c[t, : rows.shape[0], :n_c] = rows[:, modes.n_modes :]
+    for s, t in enumerate(reduced.span_type):
+        if not B_span[s].same(B_span[reduced.representative[t]]):
+            raise AssertionError("a span's droppers differ from its type's")  # a bug, never a user error
+    t_of, within = reduced.span_type[d_span], np.arange(d_span.size) - start[d_span]
     return dict(
         dropper_span=d_span,
-        dropper_start=np.searchsorted(d_span, np.arange(len(reduced.internal) + 1)).astype(np.int64),
-        dropper_q=d_q * inv_d[reduced.span_type[d_span]],
-        dropper_q_plain=d_q,
-        dropper_c=d_c,
+        dropper_start=start,
+        dropper_q=type_q[t_of, within] * inv_d[t_of],
+        type_dropper_q=type_q * inv_d[:, None, :],
+        dropper_q_plain=type_q[t_of, within],
+        dropper_c=type_c[t_of, within],
     )
 
 

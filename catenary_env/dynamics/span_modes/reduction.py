@@ -101,6 +101,9 @@ class ReducedSystem:
         Highest frequency of the kept modes, Hz.
     span_type : ndarray (S,)
         Index into ``types`` of each span.
+    representative : ndarray (T,)
+        Each type's representative: the span whose matrices its modes are, and that every span of the
+        type stands for.
     types : tuple of SpanModes
     internal : tuple of ndarray
         Each span's internal DOFs (free-DOF indices, in track order).
@@ -117,6 +120,7 @@ class ReducedSystem:
     system: LinearSystem
     cutoff: float
     span_type: np.ndarray
+    representative: np.ndarray
     types: tuple[SpanModes, ...]
     internal: tuple[np.ndarray, ...]
     coupled: tuple[np.ndarray, ...]
@@ -466,6 +470,7 @@ def reduce_system(system: LinearSystem, cutoff: float, far_cutoff: float | None 
         system=system,
         cutoff=float(cutoff),
         span_type=span_type,
+        representative=np.array([r for r, _, _ in representatives], dtype=np.int64),
         types=tuple(types),
         internal=internal,
         coupled=coupled,
