@@ -196,6 +196,28 @@ def test_evaluation_stops_one_span_after_the_analysis_section_without_changing_i
 # the residual from the truncated eigenpairs, sparse blocks gathered by hand.
 
 
+def test_a_passage_without_kept_configurations_is_the_one_with_them(
+    system, benchmark_pantograph_definition, monkeypatch
+):
+    """A passage holds one configuration's arrays at a time, built as it enters it or taken from those the
+    design keeps (within a memory budget): rebuilt or kept, the passage is the same to rounding (a
+    configuration built again may round differently, by some 1e-10 N, from one run to the next)."""
+    from catenary_env.dynamics.span_modes import preparation
+
+    def passage(budget, repeat=1):
+        monkeypatch.setattr(preparation, "KEPT_CONFIGURATION_BYTES", budget)
+        prepared = span_modes.prepare_reduced(reduce_system(system, 200.0), DT, near_spans=1)
+        for _ in range(repeat):
+            trajectory = simulate_reduced(prepared, benchmark_pantograph_definition, 190.0, SPEED)
+        return trajectory, prepared
+
+    kept, prepared = passage(2**40, repeat=2)  # the second passage runs on the kept configurations
+    rebuilt, unkept = passage(0)
+    assert len(prepared.built) == system.static.layout.n_spans and set(unkept.built) == {(0,)}
+    np.testing.assert_allclose(kept.contact_force, rebuilt.contact_force, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(kept.dropper_force_max, rebuilt.dropper_force_max, rtol=0, atol=1e-8)
+
+
 def _plain(monkeypatch, system, *args):
     """reduce_system with every span's eigenproblem solved as it is (no mirror images)."""
     with monkeypatch.context() as patch:

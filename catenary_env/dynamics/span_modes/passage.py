@@ -19,8 +19,8 @@ from ..history import start_history, trajectory
 from ..newmark import Trajectory
 from ..protocol import Passage, choose_backend, run_in_chunks
 from . import loop
-from .preparation import PreparedSpanModes, SpanModeArrays, initial_acceleration
-from .state import SpanModeState, start_state
+from .preparation import PreparedSpanModes, initial_acceleration
+from .state import start_state
 
 
 def run(prepared: PreparedSpanModes, passage: Passage) -> Trajectory:
@@ -29,8 +29,10 @@ def run(prepared: PreparedSpanModes, passage: Passage) -> Trajectory:
     reduced = prepared.reduced
     system = reduced.system
     started = start_train(system, passage, prepared.constants)
-    d, configuration = _configurations(prepared, tuple(one.arrays for one in started))
-    acceleration = initial_acceleration(reduced, d.kept[configuration[0]], initial_load(system, started))
+    points = tuple(one.arrays for one in started)
+    configurations, configuration = _configurations(prepared, points)
+    first = prepared.arrays_for(configurations[configuration[0]])
+    acceleration = initial_acceleration(reduced, first.kept[0], initial_load(system, started))
     history = start_history(
         started[0].time.size,
         system.support_z.size,
@@ -38,18 +40,35 @@ def run(prepared: PreparedSpanModes, passage: Passage) -> Trajectory:
         np.array([one.force0 for one in started]),
         np.array([one.state.y[-1] for one in started]),
     )
-    state = start_state(acceleration, d.coefficients.e3, d.coefficients.g3, started, history)
-    points = tuple(one.arrays for one in started)
-    BACKENDS[backend](d, points, state, configuration, passage.progress)
+    state = start_state(acceleration, first.coefficients.e3, first.coefficients.g3, started, history)
+    run_steps = BACKENDS[backend]()
+    zero = np.zeros(configuration.size, dtype=np.int64)
+    current: list = [None, None]  # the configuration whose arrays the loop has, and the arrays
+
+    def steps(begin: int, stop: int) -> None:
+        """Steps ``begin`` to ``stop - 1``, a configuration at a time, each as configuration 0 of its own
+        arrays (built, or taken from the design's, as the passage enters it): only one configuration's
+        arrays at a time, which a long section's would otherwise fill the memory with."""
+        k = begin
+        while k < stop:
+            c = configuration[k]
+            end = k + int(np.argmax(np.r_[configuration[k:stop], -1] != c))
+            if current[0] != c:
+                current[:] = c, prepared.arrays_for(configurations[c])
+                state.configuration[0] = -1  # the loop enters it: drops the modes no longer kept
+            run_steps(current[1], points, state, zero, k, end)
+            k = end
+
+    run_in_chunks(steps, configuration.size, passage.progress)
     positions = tuple(one.position for one in started)
     return trajectory(history, started[0].time, positions, system.static.layout.support_x)
 
 
 def _configurations(
     prepared: PreparedSpanModes, points: tuple[ContactPointArrays, ...]
-) -> tuple[SpanModeArrays, np.ndarray]:
-    """The design's arrays with the configurations the passage meets, and each step's configuration: the
-    spans the pantographs are in (docs/model.md, 'Several pantographs')."""
+) -> tuple[list[tuple[int, ...]], np.ndarray]:
+    """The configurations the passage meets, the spans the pantographs are in (docs/model.md, 'Several
+    pantographs'), and each step's, as an index into them."""
     d = prepared.arrays
     spans = np.stack([np.where(p.element >= 0, d.element_span[np.maximum(p.element, 0)], -1) for p in points])
     on = spans >= 0
@@ -63,43 +82,23 @@ def _configurations(
                     "least (the exact model takes any spacing)"
                 )
     tuples, configuration = np.unique(spans.T, axis=0, return_inverse=True)
-    return prepared.arrays_for(tuple(tuple(int(s) for s in row) for row in tuples)), configuration.ravel()
+    return [tuple(int(s) for s in row) for row in tuples], configuration.ravel()
 
 
-def _run_numpy(
-    d: SpanModeArrays,
-    points: tuple[ContactPointArrays, ...],
-    state: SpanModeState,
-    configuration: np.ndarray,
-    progress: Callable[[float], None] | None,
-) -> None:
-    run_in_chunks(
-        lambda first, stop: loop.run_steps(d, points, state, configuration, first, stop),
-        points[0].element.size,
-        progress,
-    )
+def _numpy_steps() -> Callable:
+    return loop.run_steps
 
 
-def _run_compiled(
-    d: SpanModeArrays,
-    points: tuple[ContactPointArrays, ...],
-    state: SpanModeState,
-    configuration: np.ndarray,
-    progress: Callable[[float], None] | None,
-) -> None:
+def _compiled_steps() -> Callable:
     kernels = _compiled_kernels()
     if kernels is None:
         raise ImportError("backend='numba' needs numba: pip install numba")
-    configuration = configuration.astype(np.int64)
-    run_in_chunks(
-        lambda first, stop: kernels.run_steps(d, points, state, configuration, first, stop),
-        points[0].element.size,
-        progress,
-    )
+    return kernels.run_steps
 
 
-BACKENDS = {"numba": _run_compiled, "numpy": _run_numpy}
-"""The span-mode passage's time loops by name; ``"auto"`` takes numba where it is installed."""
+BACKENDS = {"numba": _compiled_steps, "numpy": _numpy_steps}
+"""The span-mode passage's time loops by name (each a function that gives the loop's ``run_steps``);
+``"auto"`` takes numba where it is installed."""
 
 
 def _compiled_kernels() -> ModuleType | None:

@@ -119,10 +119,15 @@ class PreparedSpanModes:
     near_spans : int
     arrays : SpanModeArrays
         What both loops read of the design, with one configuration (the pantograph in the first span); a
-        passage reads :meth:`arrays_for` the configurations it meets.
+        passage reads :meth:`arrays_for` each configuration it meets, while it is in it.
     builder : _ConfigurationBuilder
-        Builds the configurations (:meth:`arrays_for`), once each, when a passage first needs them: one that
-        stops early, as ``evaluate``'s does, never builds those of the spans it does not reach.
+        Builds the configurations (:meth:`arrays_for`) when a passage first needs them: one that stops
+        early, as ``evaluate``'s does, never builds those of the spans it does not reach.
+    built : dict
+        The configurations built so far, kept for the next passage (another speed) while they take at most
+        :data:`KEPT_CONFIGURATION_BYTES` together: a configuration's droppers' flexibility is a dense matrix
+        over every dropper of the section, some 0.5 MB at 20 spans and 8 MB at 80, so that a long section's
+        would otherwise grow with the cube of its length.
     """
 
     reduced: ReducedSystem
@@ -134,13 +139,20 @@ class PreparedSpanModes:
         default_factory=dict, repr=False, compare=False
     )
 
-    def arrays_for(self, configurations: tuple[tuple[int, ...], ...]) -> SpanModeArrays:
-        """The design's arrays with these configurations, each the spans the pantographs are in (-1: off
-        the section); a configuration is built on its first use and kept."""
-        for one in configurations:
-            if one not in self.built:
-                self.built[one] = self.builder.build(one)
-        return self.arrays._replace(**stack_configurations([self.built[one] for one in configurations]))
+    def arrays_for(self, configuration: tuple[int, ...]) -> SpanModeArrays:
+        """The design's arrays in one configuration, the spans the pantographs are in (-1: off the section),
+        as configuration 0; built on its first use, and kept within :data:`KEPT_CONFIGURATION_BYTES`."""
+        one = self.built.get(configuration)
+        if one is None:
+            one = self.builder.build(configuration)
+            kept = sum(a.nbytes for built in self.built.values() for a in built.values())
+            if kept + sum(a.nbytes for a in one.values()) <= KEPT_CONFIGURATION_BYTES:
+                self.built[configuration] = one
+        return self.arrays._replace(**as_configuration_zero(one))
+
+
+KEPT_CONFIGURATION_BYTES = 64 * 2**20
+"""The built configurations a prepared design keeps for its next passages, at most (bytes)."""
 
 
 def prepare(system: LinearSystem, fidelity: DynamicsSettings) -> PreparedSpanModes:
@@ -173,7 +185,7 @@ def prepare_reduced(reduced: ReducedSystem, time_step: float, near_spans: int) -
     arrays = SpanModeArrays(
         **modes,
         **droppers,
-        **stack_configurations([first]),
+        **as_configuration_zero(first),
         **elements,
         droppers=Droppers.for_step(system.dropper_rate, system.dropper_force, system.beta, nm.a1),
         support=residual.interface_position[system.support_z],
@@ -459,9 +471,10 @@ class _ConfigurationBuilder:
         return out
 
 
-def stack_configurations(built: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
-    """Configurations' arrays (:meth:`_ConfigurationBuilder.build`), one after the other."""
-    return {name: np.stack([one[name] for one in built]) for name in ("kept", *CONFIGURATION_FIELDS)}
+def as_configuration_zero(built: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """A configuration's arrays (:meth:`_ConfigurationBuilder.build`) as the loops read them, configuration
+    0 of one (views, not copies)."""
+    return {name: built[name][None] for name in ("kept", *CONFIGURATION_FIELDS)}
 
 
 def _element_arrays(
