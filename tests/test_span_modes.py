@@ -218,6 +218,19 @@ def test_a_passage_without_kept_configurations_is_the_one_with_them(
     np.testing.assert_allclose(kept.dropper_force_max, rebuilt.dropper_force_max, rtol=0, atol=1e-8)
 
 
+def test_progress_reports_do_not_change_the_span_mode_passage(system, benchmark_pantograph_definition):
+    # With progress the loop runs in a hundred calls, which split the configurations' stretches of steps.
+    prepared = span_modes.prepare_reduced(reduce_system(system, 200.0), DT, near_spans=1)
+    fractions: list[float] = []
+    chunked = simulate_reduced(
+        prepared, benchmark_pantograph_definition, 190.0, SPEED, progress=fractions.append
+    )
+    whole = simulate_reduced(prepared, benchmark_pantograph_definition, 190.0, SPEED)
+    assert len(fractions) > 50 and fractions[-1] == 1.0
+    np.testing.assert_array_equal(chunked.contact_force, whole.contact_force)
+    np.testing.assert_array_equal(chunked.support_uplift, whole.support_uplift)
+
+
 def _plain(monkeypatch, system, *args):
     """reduce_system with every span's eigenproblem solved as it is (no mirror images)."""
     with monkeypatch.context() as patch:

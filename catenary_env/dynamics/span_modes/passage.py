@@ -43,6 +43,7 @@ def run(prepared: PreparedSpanModes, passage: Passage) -> Trajectory:
     state = start_state(acceleration, first.coefficients.e3, first.coefficients.g3, started, history)
     run_steps = BACKENDS[backend]()
     zero = np.zeros(configuration.size, dtype=np.int64)
+    changes = np.r_[np.flatnonzero(np.diff(configuration)) + 1, configuration.size]  # each segment's end
     current: list = [None, None]  # the configuration whose arrays the loop has, and the arrays
 
     def steps(begin: int, stop: int) -> None:
@@ -52,7 +53,7 @@ def run(prepared: PreparedSpanModes, passage: Passage) -> Trajectory:
         k = begin
         while k < stop:
             c = configuration[k]
-            end = k + int(np.argmax(np.r_[configuration[k:stop], -1] != c))
+            end = min(stop, int(changes[np.searchsorted(changes, k, side="right")]))
             if current[0] != c:
                 current[:] = c, prepared.arrays_for(configurations[c])
                 state.configuration[0] = -1  # the loop enters it: drops the modes no longer kept
