@@ -47,10 +47,10 @@ from .reduction import ReducedSystem, band_storage, band_width, reduce_system, s
 
 
 class SpanModeArrays(NamedTuple):
-    """What both loops read of the design. Shapes: S spans, T types, C configurations (one pantograph: C = S),
-    P pantographs, D droppers, n_b
-    interface DOFs, w the Schur complement's band width, m, n_c, n_i the padded modes, coupled interface and
-    internal DOFs of a span type, E contact-wire elements, K droppers per span.
+    """What both loops read of the design. Shapes: S spans, T types, C configurations (a passage hands the
+    loops one at a time, C = 1), P pantographs, D droppers, n_b interface DOFs, w the Schur complement's band
+    width, m, n_c, n_i the padded modes, coupled interface and internal DOFs of a span type, E contact-wire
+    elements, K droppers per span.
     """
 
     span_type: np.ndarray  # (S,)
