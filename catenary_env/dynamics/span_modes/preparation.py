@@ -389,17 +389,23 @@ class _ConfigurationBuilder:
             band_width(reduced.interface_mass),
             band_width(reduced.interface_stiffness),
         )
-        # A span's share of Σ M_cq D⁻¹ M_qc, of its droppers' H, G and residual, per mode count kept.
+        # A span's share of Σ M_cq D⁻¹ M_qc, of its droppers' H, G and residual, per mode count kept: the
+        # first three its type's (the droppers' rows are the type's, _dropper_arrays), the residual its own.
         self.start = start = droppers["dropper_start"]
         self.span_sum, self.span_h, self.modal_block, self.residual_block = {}, {}, {}, {}
+        of_type = {}
         for s in range(n_spans):
             t = reduced.span_type[s]
             q = slice(start[s], start[s + 1])
             for k in {types[t].far_modes, types[t].n_modes}:
-                mqc = types[t].mass_coupling[:k] * np.sqrt(inv_d[t, :k, None])
-                self.span_sum[s, k] = mqc.T @ mqc
-                self.span_h[s, k] = d_qd[q, :k] @ coupling[t, :, :k].T
-                self.modal_block[s, k] = (d_q[q, :k] * inv_d[t, :k]) @ d_q[q, :k].T
+                if (t, k) not in of_type:
+                    mqc = types[t].mass_coupling[:k] * np.sqrt(inv_d[t, :k, None])
+                    of_type[t, k] = (
+                        mqc.T @ mqc,
+                        d_qd[q, :k] @ coupling[t, :, :k].T,
+                        (d_q[q, :k] * inv_d[t, :k]) @ d_q[q, :k].T,
+                    )
+                self.span_sum[s, k], self.span_h[s, k], self.modal_block[s, k] = of_type[t, k]
                 self.residual_block[s, k] = residual.dropper_block(reduced, s, near=k == types[t].n_modes)
         self.d_cols = modes["coupled"][d_span]
         self.d_valid = np.arange(nc_max)[None, :] < modes["n_coupled"][reduced.span_type[d_span]][:, None]
