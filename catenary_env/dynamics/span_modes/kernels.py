@@ -34,7 +34,8 @@ from ..newmark import advance
 
 FAST = {"contract", "reassoc"}
 """Floating-point licences: fused multiply-adds, and sums in any order so that the dot products
-vectorise (the results change by rounding only)."""
+vectorise (the results change by rounding only). A loop that sums under them stores nothing, so that its
+order of summation is always the vectorised one (see :func:`_contact_point`)."""
 
 # The helpers a step calls are inlined into the loop (``inline="always"``, numba's own inlining): called, each
 # took its arrays as views whose reference counts (atomic NRT increments and decrements, some ten a call)
@@ -223,11 +224,16 @@ def _contact_point(  # pragma: no cover - compiled
     m = d.kept[c, s_el]
     inv_d = d.inverse_diagonal[t_el]
     r0, r1, r2, r3 = rows_q[0], rows_q[1], rows_q[2], rows_q[3]
+    # Two loops, not one: a loop that stores h_q and sums `wire` is vectorised behind a run-time check that
+    # h_q lies clear of what it reads, and that check (on the distance between addresses) now and then
+    # fails for arrays that merely lie close; the scalar fallback then sums in another order, so the forces
+    # changed in their 13th digit with where the allocator put a work array (docs/model.md, 'Results and
+    # the model that made them'). A loop that sums stores nothing.
+    for i in range(m):
+        h_q[i] = h[0] * r0[i] + h[1] * r1[i] + h[2] * r2[i] + h[3] * r3[i]
     wire = 0.0
     for i in range(m):
-        hq = h[0] * r0[i] + h[1] * r1[i] + h[2] * r2[i] + h[3] * r3[i]
-        h_q[i] = hq
-        wire += hq * (inv_d[i] * e_vec[off + i] + y[off + i])
+        wire += h_q[i] * (inv_d[i] * e_vec[off + i] + y[off + i])
     for j in range(d.n_coupled[t_el]):
         cj = d.coupled[s_el, j]
         hm = h[0] * m_qc[0, j] + h[1] * m_qc[1, j] + h[2] * m_qc[2, j] + h[3] * m_qc[3, j]
