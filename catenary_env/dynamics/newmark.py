@@ -108,7 +108,7 @@ class StepCoefficients(NamedTuple):
         return cls(*e, *g, *newmark, contact_stiffness, beta, c_m, 1.0 / c_k)
 
 
-@compilable(fastmath={"contract"}, inline="always")  # into the loops, as their other helpers (kernels.py)
+@compilable(fastmath={"contract"}, inline="always")  # inlined into the loops (docs/performance.md, 'Speed')
 def advance(u, v, acc, x, y, b, cf):  # noqa: ANN001, ANN201 - compilable
     """Newmark update to u₁ = b + y (n,), then the next step's x = e1 u + e2 v + e3 a and y = g1 u + g2 v
     + g3 a (:class:`StepCoefficients` ``cf``), in place: the compiled loops' update."""
