@@ -1,0 +1,157 @@
+"""Profile: where a passage's compiled time loop spends its time, line by line (docs/performance.md, 'Speed').
+
+Runs passages of a preset's level design under Linux ``perf`` (sampling the processor's instruction pointer),
+with the loop compiled afresh with numba's debug lines, and maps the samples that fall in the loop's machine
+code onto the source lines they were compiled from. A helper that is inlined into the loop shows as its own
+lines (``kernels.py:44`` is ``_dot``'s body, wherever it is called from); one that is called shows as the line
+of its call. It finds what timing the parts one at a time cannot: work that no part of the arithmetic names
+(calls, reference counting, scalar fallbacks of vectorised loops).
+
+    python benchmarks/profile_loop.py                          # span-mode loop, benchmark catenary
+    python benchmarks/profile_loop.py --model exact --passages 5
+    python benchmarks/profile_loop.py --preset stitched --top 40
+
+Needs ``perf`` (allowed to sample this user's processes: ``kernel.perf_event_paranoid`` at 2 or less) and
+binutils' ``addr2line``. It reads numba internals (the compiled object of the loop's library), so a numba
+release may break it; the simulator does not depend on it. Prints the share of the loop's samples per source
+line, the line's text, and the loop's share of all samples (most of the rest is the compilation).
+
+The shares are a guide, not a measurement: the debug lines cost the compiler some of its freedom, and a
+sample lands on the instruction after the one that stalled (the element's responses, some 3 % of a step when
+timed by running them twice, take 12 % here). Confirm what it points at by timing the loop with and without.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+MODULES = {
+    "span-modes": "catenary_env.dynamics.span_modes.kernels",
+    "exact": "catenary_env.dynamics.exact.kernels",
+}
+
+
+def child(args: argparse.Namespace) -> None:
+    """In the profiled process: compile the loop, write its object code and address, then run the passages."""
+    import importlib
+
+    from catenary_env.dynamics.linear_system import linearise
+    from catenary_env.model.design import level_design
+    from catenary_env.model.presets import load_catenary, load_pantograph
+    from catenary_env.pipeline import Fidelity, prepare_dynamics, run_passage, solve_static
+
+    catenary = load_catenary(args.preset)
+    pantograph = load_pantograph(catenary.pantograph)
+    fidelity = Fidelity(dynamics=args.model)
+    static = solve_static(catenary, level_design(catenary), fidelity)
+    system = linearise(static)
+    prepared = prepare_dynamics(system, fidelity)
+
+    def passage() -> None:
+        run_passage(
+            static, pantograph, args.speed / 3.6, fidelity, args.uplift, system=system, prepared=prepared,
+            statistics_only=True,
+        )  # fmt: skip
+
+    passage()  # compiles the loop (a fresh cache: with debug lines)
+    kernels = importlib.import_module(MODULES[args.model])
+    (result,) = kernels.run_steps.overloads.values()
+    library = result.library
+    out = Path(args.child)
+    (out / "loop.o").write_bytes(library._get_compiled_object())
+    (out / "address").write_text(str(library.get_pointer_to_function(result.fndesc.mangled_name)))
+    for _ in range(args.passages):
+        passage()
+
+
+def _symbol_size(obj: Path) -> tuple[int, int]:
+    """Offset and size of the loop's function in its object code (``nm``)."""
+    listing = subprocess.run(
+        ["nm", "-S", "--defined-only", str(obj)], capture_output=True, text=True, check=True
+    )
+    for line in listing.stdout.splitlines():
+        fields = line.split()
+        if len(fields) == 4 and fields[2] == "T" and "run_steps" in fields[3] and "cpython" not in fields[3]:
+            if not fields[3].startswith("cfunc"):
+                return int(fields[0], 16), int(fields[1], 16)
+    raise RuntimeError(f"no run_steps in {obj}")
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument(
+        "--model", choices=sorted(MODULES), default="span-modes", help="the loop (default span-modes)"
+    )
+    parser.add_argument("--preset", default="benchmark", help="catenary preset (default: benchmark)")
+    parser.add_argument("--speed", type=float, default=300.0, help="km/h (default 300)")
+    parser.add_argument(
+        "--uplift", type=float, default=170.0, help="pantograph uplift force, N (default 170)"
+    )
+    parser.add_argument("--passages", type=int, default=20, help="passages sampled (default 20)")
+    parser.add_argument("--top", type=int, default=30, help="source lines printed (default 30)")
+    parser.add_argument("--child", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.child:
+        child(args)
+        return 0
+    if args.passages < 1 or args.top < 1:
+        parser.error("--passages and --top: must be at least 1")
+    missing = [tool for tool in ("perf", "nm", "addr2line") if shutil.which(tool) is None]
+    if missing:
+        print(f"profile_loop: needs {', '.join(missing)} (Linux perf and binutils)", file=sys.stderr)
+        return 2
+    with tempfile.TemporaryDirectory() as folder:
+        out = Path(folder)
+        env = dict(
+            os.environ,
+            NUMBA_DEBUGINFO="1",  # the loop's source lines, in a cache of its own
+            NUMBA_CACHE_DIR=str(out / "numba"),
+            OPENBLAS_NUM_THREADS="1",
+            PYTHONWARNINGS="ignore",  # numba's warnings on the lines of its own helpers
+        )
+        command = [sys.executable, __file__, "--child", folder, *sys.argv[1:]]
+        record = ["perf", "record", "-q", "-F", "4000", "-o", str(out / "perf.data"), "--", *command]
+        if subprocess.run(record, env=env).returncode != 0:
+            print("profile_loop: perf record failed (is perf_event_paranoid at 2 or less?)", file=sys.stderr)
+            return 2
+        script = subprocess.run(
+            ["perf", "script", "-i", str(out / "perf.data"), "-F", "ip"],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        ips = [int(word, 16) for word in script.stdout.split()]
+        base = int((out / "address").read_text())
+        start, size = _symbol_size(out / "loop.o")
+        offsets = collections.Counter(ip - base + start for ip in ips if base <= ip < base + size)
+        if not offsets:
+            print("profile_loop: no sample fell in the loop", file=sys.stderr)
+            return 1
+        where = subprocess.run(
+            ["addr2line", "-e", str(out / "loop.o"), *(hex(o) for o in offsets)],
+            capture_output=True, text=True, check=True,
+        ).stdout.split()  # fmt: skip
+    lines: collections.Counter[str] = collections.Counter()
+    for offset, place in zip(offsets, where, strict=True):
+        lines[place] += offsets[offset]
+    total = sum(offsets.values())
+    print(f"{args.model} loop, {args.preset}, {args.passages} passages: {total} samples in the loop, "
+          f"{100 * total / len(ips):.0f} % of the process's")  # fmt: skip
+    for place, count in lines.most_common(args.top):
+        path, _, number = place.rpartition(":")
+        text = "(no source line)"
+        if number.isdigit() and Path(path).is_file():
+            text = Path(path).read_text().splitlines()[int(number) - 1].strip()
+        print(f"{100 * count / total:5.1f} %  {Path(path).name}:{number:<5} {text[:90]}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
