@@ -77,10 +77,10 @@ def _symbol_size(obj: Path) -> tuple[int, int]:
         ["nm", "-S", "--defined-only", str(obj)], capture_output=True, text=True, check=True
     )
     for line in listing.stdout.splitlines():
-        fields = line.split()
-        if len(fields) == 4 and fields[2] == "T" and "run_steps" in fields[3] and "cpython" not in fields[3]:
-            if not fields[3].startswith("cfunc"):
-                return int(fields[0], 16), int(fields[1], 16)
+        fields = line.split()  # offset, size, kind, name; the loop's wrappers start "_ZN7cpython" and "cfunc"
+        name = fields[3] if len(fields) == 4 and fields[2] == "T" else ""
+        if name.startswith("_ZN12catenary_env") and "7kernels9run_steps" in name:
+            return int(fields[0], 16), int(fields[1], 16)
     raise RuntimeError(f"no run_steps in {obj}")
 
 
