@@ -154,4 +154,8 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    try:
+        raise SystemExit(main())
+    except KeyboardInterrupt:
+        print("profile_loop: interrupted", file=sys.stderr)
+        raise SystemExit(130) from None

@@ -37,12 +37,13 @@ FAST = {"contract", "reassoc"}
 vectorise (the results change by rounding only). A loop that sums under them stores nothing, so that its
 order of summation is always the vectorised one (see :func:`_contact_point`)."""
 
-# The helpers a step calls are inlined into the loop (``inline="always"``, numba's own inlining): called, each
-# took its arrays as views whose reference counts (atomic NRT increments and decrements, some ten a call)
-# the compiler could not prune, about a tenth of a step (docs/performance.md, 'Speed').
+inlined = njit(cache=True, fastmath=FAST, inline="always")
+"""The decorator of the helpers a step calls: inlined into the loop (numba's own inlining). Called, each took
+its arrays as views whose reference counts (atomic increments and decrements, some ten a call) the compiler
+could not prune, about a tenth of a step (docs/performance.md, 'Speed')."""
 
 
-@njit(cache=True, fastmath=FAST, inline="always")
+@inlined
 def _dot(a, b, m):  # pragma: no cover - compiled
     """a[:m] · b[:m] (1-D views, so that the loop vectorises)."""
     acc = 0.0
@@ -51,14 +52,14 @@ def _dot(a, b, m):  # pragma: no cover - compiled
     return acc
 
 
-@njit(cache=True, fastmath=FAST, inline="always")
+@inlined
 def _axpy(a, alpha, out, m):  # pragma: no cover - compiled
     """out[:m] += alpha a[:m]."""
     for i in range(m):
         out[i] += alpha * a[i]
 
 
-@njit(cache=True, fastmath=FAST, inline="always")
+@inlined
 def _band_solve(factor, b, x):  # pragma: no cover - compiled
     """x = (Uᵀ U)⁻¹ b for the banded upper factor U in :func:`.preparation.band_rows` form: row j of
     ``factor[0]`` holds U[j - w .. j - 1, j], row i of ``factor[1]`` holds U[i, i + 1 .. i + w], and
@@ -87,7 +88,7 @@ def _band_solve(factor, b, x):  # pragma: no cover - compiled
             above[k] -= column[k] * xj
 
 
-@njit(cache=True, fastmath=FAST, inline="always")
+@inlined
 def _element_rows(d, e, rows_q, rows_c):  # pragma: no cover - compiled
     """The contact-wire element's rows of T: modal part (4, m) and coupled-interface part (4, n_c)."""
     t = d.span_type[d.element_span[e]]
@@ -104,7 +105,7 @@ def _element_rows(d, e, rows_q, rows_c):  # pragma: no cover - compiled
             rows_c[i, -1 - local] = 1.0
 
 
-@njit(cache=True, fastmath=FAST, inline="always")
+@inlined
 def _element_responses(d, c, slot, e, rows_c, p_b, comp, g_modal, g_full, mq, forces):  # pragma: no cover
     """A unit force at each of the element's 4 DOFs: interface response p_b (4, n_b), compliance
     (4, 4) with the residual, the droppers' elongations (4, D), of the kept modes and with the
@@ -171,7 +172,7 @@ def _configure(d, st, c):  # pragma: no cover - compiled
     st.configuration[0] = c
 
 
-@njit(cache=True, fastmath=FAST, inline="always")
+@inlined
 def _rows_dot(rows, first, count, x, m, out):  # pragma: no cover - compiled
     """out[k] = rows[first + k, :m] · x[:m] for k < count, four rows per pass over x."""
     k = 0
@@ -191,7 +192,7 @@ def _rows_dot(rows, first, count, x, m, out):  # pragma: no cover - compiled
         k += 1
 
 
-@njit(cache=True, fastmath=FAST, inline="always")
+@inlined
 def _rows_axpy(rows, g, count, out, m):  # pragma: no cover - compiled
     """out[:m] += Σ_k g[k] rows[k, :m] over k < count, four rows per pass over out."""
     k = 0
@@ -206,7 +207,7 @@ def _rows_axpy(rows, g, count, out, m):  # pragma: no cover - compiled
         k += 1
 
 
-@njit(cache=True, fastmath=FAST, inline="always")
+@inlined
 def _contact_point(  # pragma: no cover - compiled
     d, point, ps, k, c, el, rows_q, rows_c, m_qc, comp, g_full, g_modal, e_vec, y, x_b, g_c, h_q, g_dc, gm_dc,
     rhs_p, y_known,
