@@ -4,12 +4,16 @@ loops gave before the protocol (tests/data/recorded_passages.npz) reproduced thr
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
+import numpy as np
 import pytest
 from conftest import assert_recorded
 
 from catenary_env.dynamics import exact, span_modes
 from catenary_env.dynamics.models import DYNAMIC_MODELS
 from catenary_env.dynamics.protocol import ContactPoint, Passage
+from catenary_env.dynamics.span_modes.passage import _configurations
 from catenary_env.model.design import level_design
 from catenary_env.pipeline import DYNAMICS, FIDELITIES, Fidelity, run_passage, solve_static
 
@@ -83,3 +87,16 @@ def test_a_passage_names_its_wrong_field(benchmark_pantograph_definition):
         Passage(SPEED, (point, ContactPoint(benchmark_pantograph_definition, 170.0, offset=-5.0)))
     with pytest.raises(ValueError, match="passage.n_steps"):
         Passage(SPEED, (point,), n_steps=0)
+
+
+def test_one_pantograph_s_configurations_are_those_of_the_rows():
+    """The single pantograph's shortcut gives the configurations, and each step's, that numpy's unique by
+    rows gives (the general path, which a train takes)."""
+    element_span = np.repeat(np.arange(7), 5)
+    element = np.r_[np.full(4, -1), np.arange(35), np.arange(35)[::-1], np.full(3, -1)]
+    prepared = SimpleNamespace(arrays=SimpleNamespace(element_span=element_span))
+    tuples, configuration = _configurations(prepared, (SimpleNamespace(element=element),))
+    spans = np.where(element >= 0, element_span[np.maximum(element, 0)], -1)
+    rows, expected = np.unique(spans[:, None], axis=0, return_inverse=True)
+    assert tuples == [tuple(int(s) for s in row) for row in rows]
+    np.testing.assert_array_equal(configuration, expected.ravel())
