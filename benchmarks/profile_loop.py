@@ -10,6 +10,7 @@ of its call. It finds what timing the parts one at a time cannot: work that no p
     python benchmarks/profile_loop.py                          # span-mode loop, benchmark catenary
     python benchmarks/profile_loop.py --model exact --passages 5
     python benchmarks/profile_loop.py --preset stitched --top 40
+    python benchmarks/profile_loop.py --spans 40               # what grows with the section
 
 Needs ``perf`` (allowed to sample this user's processes: ``kernel.perf_event_paranoid`` at 2 or less) and
 binutils' ``addr2line``. It reads numba internals (the compiled object of the loop's library), so a numba
@@ -49,7 +50,7 @@ def child(args: argparse.Namespace) -> None:
 
     catenary = load_catenary(args.preset)
     pantograph = load_pantograph(catenary.pantograph)
-    fidelity = Fidelity(dynamics=args.model)
+    fidelity = Fidelity(dynamics=args.model, n_spans=args.spans, analysis_spans=args.spans // 2)
     static = solve_static(catenary, level_design(catenary), fidelity)
     system = linearise(static)
     prepared = prepare_dynamics(system, fidelity)
@@ -94,6 +95,7 @@ def main() -> int:
     parser.add_argument(
         "--uplift", type=float, default=170.0, help="pantograph uplift force, N (default 170)"
     )
+    parser.add_argument("--spans", type=int, default=20, help="section length, spans (default 20)")
     parser.add_argument("--passages", type=int, default=20, help="passages sampled (default 20)")
     parser.add_argument("--top", type=int, default=30, help="source lines printed (default 30)")
     parser.add_argument("--child", help=argparse.SUPPRESS)
@@ -103,6 +105,8 @@ def main() -> int:
         return 0
     if args.passages < 1 or args.top < 1:
         parser.error("--passages and --top: must be at least 1")
+    if args.spans < 4:
+        parser.error("--spans: must be at least 4")
     missing = [tool for tool in ("perf", "nm", "addr2line") if shutil.which(tool) is None]
     if missing:
         print(f"profile_loop: needs {', '.join(missing)} (Linux perf and binutils)", file=sys.stderr)
@@ -142,8 +146,8 @@ def main() -> int:
     for offset, place in zip(offsets, where, strict=True):
         lines[place] += offsets[offset]
     total = sum(offsets.values())
-    print(f"{args.model} loop, {args.preset}, {args.passages} passages: {total} samples in the loop, "
-          f"{100 * total / len(ips):.0f} % of the process's")  # fmt: skip
+    print(f"{args.model} loop, {args.preset}, {args.spans} spans, {args.passages} passages: {total} samples"
+          f" in the loop, {100 * total / len(ips):.0f} % of the process's")  # fmt: skip
     for place, count in lines.most_common(args.top):
         path, _, number = place.rpartition(":")
         text = "(no source line)"
