@@ -17,6 +17,7 @@ from typing import NamedTuple
 import numpy as np
 import scipy.sparse.linalg as spla
 
+from ..fem.track_order import compliances
 from ..model.definition import PantographDefinition
 from .linear_system import LinearSystem
 
@@ -93,11 +94,13 @@ def frame_force(system: LinearSystem, pantograph: PantographDefinition, uplift_f
     x = lay.span_length * (span + np.arange(STATIC_POINTS) / STATIC_POINTS)
     element, shape, height = system.contact_wire.locate(x)
     dofs = system.contact_wire.z_dofs[element]  # (P, 4): the contact wire's vertical coordinates are free
-    points = np.broadcast_to(np.arange(x.size)[:, None], dofs.shape)
-    loads = np.zeros((system.n_dofs, x.size))
-    np.add.at(loads, (dofs, points), shape)
-    response = spla.splu(system.stiffness.tocsc()).solve(loads)
-    compliance = np.einsum("pk,pk->p", shape, response[dofs, points])
+    compliance = compliances(system.stiffness, dofs, shape)
+    if compliance is None:  # too wide a band, even renumbered: SuperLU
+        points = np.broadcast_to(np.arange(x.size)[:, None], dofs.shape)
+        loads = np.zeros((system.n_dofs, x.size))
+        np.add.at(loads, (dofs, points), shape)
+        response = spla.splu(system.stiffness.tocsc()).solve(loads)
+        compliance = np.einsum("pk,pk->p", shape, response[dofs, points])
     series = (
         compliance + 1.0 / lay.catenary.contact_stiffness + sum(1.0 / k for k in pantograph.stiffnesses[1:])
     )
