@@ -11,7 +11,9 @@ import dataclasses
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 from conftest import assert_recorded
+from scipy.sparse.csgraph import breadth_first_order
 
 from catenary_env.dynamics import exact as exact_model
 from catenary_env.dynamics import span_modes
@@ -337,3 +339,61 @@ def test_submatrix_equals_scipy_indexing(system):
     rows = np.sort(rng.choice(system.n_dofs, 40, replace=False))
     cols = rng.permutation(system.n_dofs)[:300]
     assert np.array_equal(reduction.submatrix(K, rows, cols).toarray(), K[rows][:, cols].toarray())
+
+
+def test_the_parity_basis_products_are_the_sparse_basis_ones(system):
+    """Qᵀ X and Q v by gathering rows are a sparse Q's products, to the last bit."""
+    mirror = _own_mirror(system, 2)
+    internal, _, _ = reduction.split_spans(system)
+    dofs = internal[2]
+    K = system.stiffness.tocsr()[dofs][:, dofs].toarray()
+    n = dofs.size
+    index = np.arange(n)
+    pairs, half = index[index < mirror.source], np.sqrt(0.5)
+    for parity in (1.0, -1.0):
+        on_plane = index[(mirror.source == index) & (mirror.sign == parity)]
+        rows = np.r_[pairs, mirror.source[pairs], on_plane]
+        cols = np.r_[np.arange(pairs.size), np.arange(pairs.size), pairs.size + np.arange(on_plane.size)]
+        values = np.r_[np.full(pairs.size, half), parity * half * mirror.sign[pairs], np.ones(on_plane.size)]
+        Q = sp.csr_matrix((values, (rows, cols)), shape=(n, pairs.size + on_plane.size))
+        Qt = Q.T.tocsr()
+        basis = reduction._ParityBasis.of(mirror, parity)
+        assert np.array_equal(basis.project(basis.project(K).T), Qt @ (Qt @ K).T)
+        v = np.random.default_rng(4).standard_normal((Q.shape[1], Q.shape[1]))
+        assert np.array_equal(basis.expand(v), Q @ v)
+
+
+def _tree_walk_signs(i, j, a, b, n):
+    """reduction._mirror_signs as a walk down each breadth-first tree, one DOF at a time."""
+    diagonal = np.zeros(n)
+    diagonal[i[i == j]] = np.sqrt(np.abs(a[i == j]))
+    strong = np.abs(a) > 1e-6 * diagonal[i] * diagonal[j]
+    graph = sp.csr_matrix((np.sign(a * b)[strong], (i[strong], j[strong])), shape=(n, n))
+    sign = np.zeros(n)
+    for root in range(n):
+        if sign[root]:
+            continue
+        order, parent = breadth_first_order(graph, root, directed=False)
+        child = order[1:]
+        ratio = np.asarray(graph[parent[child], child]).ravel()
+        if np.any(ratio == 0.0):
+            return None
+        sign[root] = 1.0
+        for v, r in zip(child, ratio, strict=True):
+            sign[v] = sign[parent[v]] * r
+    return sign
+
+
+def test_mirror_signs_are_those_of_the_walk_down_the_tree(system):
+    internal, _, _ = reduction.split_spans(system)
+    dofs = internal[2]
+    rows = reduction.submatrix(system.stiffness.tocsr(), dofs, dofs)
+    i, j, a, n = rows.row, rows.col, rows.data, dofs.size
+    flip = np.random.default_rng(5).choice([-1.0, 1.0], n)
+    apart = (i < n // 3) == (j < n // 3)  # two components: the first third and the rest
+    for keep in (np.ones(i.size, dtype=bool), apart):
+        args = (i[keep], j[keep], a[keep], (flip[i] * flip[j] * a)[keep], n)
+        signs = reduction._mirror_signs(*args)
+        assert np.array_equal(signs, _tree_walk_signs(*args))
+        assert np.array_equal((signs[i] * signs[j])[keep], (flip[i] * flip[j])[keep])
+    assert signs[0] == signs[n // 3] == 1.0  # each component's first DOF

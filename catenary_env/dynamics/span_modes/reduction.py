@@ -278,7 +278,9 @@ class Mirror:
     sign: np.ndarray
 
     def apply(self, vectors: np.ndarray) -> np.ndarray:
-        return self.sign[:, None] * vectors[self.source]
+        mirrored = vectors[self.source]
+        mirrored *= self.sign[:, None]  # in place: a span's eigenvectors are a megabyte
+        return mirrored
 
 
 def _dof_codes(system: LinearSystem) -> tuple[np.ndarray, np.ndarray]:
@@ -299,6 +301,7 @@ def find_mirror(
     dense_a: tuple[np.ndarray, np.ndarray],
     rows_b: tuple[SparseRows, SparseRows],
     codes: tuple[np.ndarray, np.ndarray] | None = None,
+    nonzeros_a: tuple[int, int] | None = None,
 ) -> Mirror | None:
     """The mirror image x → 2 axis - x from span a's internal DOFs onto span b's, if span b's stiffness
     and mass are span a's mirrored; None otherwise.
@@ -306,10 +309,13 @@ def find_mirror(
     DOFs match by node kind, coordinate within the node and design x; the signs (a coordinate along
     the track changes sign, and so does a slope) follow from the stiffness, along its strong entries,
     and both matrices are then checked entry by entry. ``dense_a`` holds K_aa and M_aa, ``rows_b``
-    span b's rows of K and M (its internal DOFs first); ``codes``, the system's :func:`_dof_codes` where the
-    caller has them (a section of distinct spans compares each with every type).
+    span b's rows of K and M (its internal DOFs first); ``codes``, the system's :func:`_dof_codes`, and
+    ``nonzeros_a``, the counts of non-zero entries of ``dense_a``, where the caller has them (a section of
+    distinct spans compares each with every type).
     """
     kind, x = _dof_codes(system) if codes is None else codes
+    if nonzeros_a is None:
+        nonzeros_a = tuple(np.count_nonzero(dense) for dense in dense_a)
     if a.size != b.size:
         return None
     microns = np.rint(np.r_[x[a], 2.0 * axis - x[b]] * 1e6).astype(np.int64)
@@ -320,11 +326,11 @@ def find_mirror(
     if not np.array_equal(code_a[source], code_b):
         return None
     entries = []
-    for dense, rows in zip(dense_a, rows_b, strict=True):
+    for dense, rows, nonzeros in zip(dense_a, rows_b, nonzeros_a, strict=True):
         inside = rows.col < b.size
         i, j, value = rows.row[inside], rows.col[inside], rows.data[inside]
         mirrored = dense[source[i], source[j]]
-        if np.count_nonzero(value) != np.count_nonzero(dense) or not np.allclose(
+        if np.count_nonzero(value) != nonzeros or not np.allclose(
             np.abs(mirrored), np.abs(value), rtol=0.0, atol=MIRROR_TOLERANCE * np.abs(value).max()
         ):
             return None
@@ -346,17 +352,24 @@ def _mirror_signs(i: np.ndarray, j: np.ndarray, a: np.ndarray, b: np.ndarray, n:
     strong = np.abs(a) > 1e-6 * diagonal[i] * diagonal[j]
     graph = sp.csr_matrix((np.sign(a * b)[strong], (i[strong], j[strong])), shape=(n, n))
     sign = np.zeros(n)
-    for root in range(n):
-        if sign[root]:
-            continue
+    root = 0  # each component's first DOF
+    while root < n:
         order, parent = breadth_first_order(graph, root, directed=False)
         child = order[1:]
         ratio = np.asarray(graph[parent[child], child]).ravel()
         if np.any(ratio == 0.0):
             return None
-        sign[root] = 1.0
-        for v, r in zip(child, ratio, strict=True):
-            sign[v] = sign[parent[v]] * r
+        # σ_v = σ_parent(v) r_v is the product of the ratios (±1, so exact in any order) on the path from v
+        # to the root: by pointer jumping, over positions in ``order`` (the root's 0, its own step), each
+        # pass doubling the stretch of path that ``above`` holds and ``step`` skips.
+        position = np.empty(n, dtype=np.int64)
+        position[order] = np.arange(order.size)
+        above, step = np.r_[1.0, ratio], np.r_[0, position[parent[child]]]
+        while step.any():
+            above, step = above * above[step], step[step]
+        sign[order] = above
+        unsigned = np.flatnonzero(sign == 0.0)
+        root = unsigned[0] if unsigned.size else n
     return sign
 
 
@@ -371,23 +384,51 @@ def _eigensolution(
     """
     if mirror is None or np.any(mirror.sign * mirror.sign[mirror.source] != 1.0):  # P² = I
         return sla.eigh(K_ii, M_ii, driver="gvd", check_finite=False)
-    n = K_ii.shape[0]
-    index = np.arange(n)
-    first, sign = index < mirror.source, mirror.sign
-    pairs, half = index[first], np.sqrt(0.5)
     omega2, shapes = [], []
     for parity in (1.0, -1.0):
-        on_plane = index[(mirror.source == index) & (sign == parity)]
-        rows = np.r_[pairs, mirror.source[pairs], on_plane]
-        cols = np.r_[np.arange(pairs.size), np.arange(pairs.size), pairs.size + np.arange(on_plane.size)]
-        values = np.r_[np.full(pairs.size, half), parity * half * sign[pairs], np.ones(on_plane.size)]
-        Q = sp.csr_matrix((values, (rows, cols)), shape=(n, pairs.size + on_plane.size))
-        Qt = Q.T.tocsr()
-        w, v = sla.eigh(Qt @ (Qt @ K_ii).T, Qt @ (Qt @ M_ii).T, driver="gvd", check_finite=False)
+        basis = _ParityBasis.of(mirror, parity)
+        K_pp, M_pp = (basis.project(basis.project(x).T) for x in (K_ii, M_ii))
+        w, v = sla.eigh(K_pp, M_pp, driver="gvd", check_finite=False)
         omega2.append(w)
-        shapes.append(Q @ v)
+        shapes.append(basis.expand(v))
     order = np.argsort(np.concatenate(omega2), kind="stable")
     return np.concatenate(omega2)[order], np.hstack(shapes)[:, order]
+
+
+@dataclass(frozen=True)
+class _ParityBasis:
+    """The orthonormal basis Q of a span's symmetric (parity 1) or antisymmetric (-1) vectors under its own
+    mirror image (:func:`_eigensolution`): a column (e_i + c_i e_j) / √2, c_i = ±σ_i, for each pair of mirror
+    DOFs i < j, then e_k for each DOF k on the mirror plane whose sign is the parity. Qᵀ X and Q v gather and
+    scatter rows: a sparse Q's products, term for term, without building it (a millisecond a span)."""
+
+    n: int
+    pairs: np.ndarray
+    partner: np.ndarray
+    coefficient: np.ndarray  # c_i / √2
+    on_plane: np.ndarray
+
+    HALF = np.sqrt(0.5)
+
+    @classmethod
+    def of(cls, mirror: Mirror, parity: float) -> _ParityBasis:
+        index = np.arange(mirror.source.size)
+        pairs = index[index < mirror.source]
+        on_plane = index[(mirror.source == index) & (mirror.sign == parity)]
+        return cls(index.size, pairs, mirror.source[pairs], parity * cls.HALF * mirror.sign[pairs], on_plane)
+
+    def project(self, X: np.ndarray) -> np.ndarray:
+        """Qᵀ X."""
+        paired = self.HALF * X[self.pairs] + self.coefficient[:, None] * X[self.partner]
+        return np.concatenate([paired, X[self.on_plane]])
+
+    def expand(self, v: np.ndarray) -> np.ndarray:
+        """Q v."""
+        out = np.zeros((self.n, v.shape[1]))
+        out[self.pairs] = self.HALF * v[: self.pairs.size]
+        out[self.partner] = self.coefficient[:, None] * v[: self.pairs.size]
+        out[self.on_plane] = v[self.pairs.size :]
+        return out
 
 
 def _span_modes(
@@ -416,9 +457,12 @@ def reduce_system(system: LinearSystem, cutoff: float, far_cutoff: float | None 
     M = system.mass.tocsr()
     span_length = system.static.layout.span_length
     types: list[SpanModes] = []
-    # Per type: its first span, its rows of K and M (sparse, for comparison), all its eigenpairs and
-    # the interface matrices a span of it adds.
-    representatives: list[tuple[int, tuple[SparseRows, ...], tuple[np.ndarray, np.ndarray]]] = []
+    # Per type: its first span, its rows of K and M (sparse, for comparison), all its eigenpairs, the
+    # counts of non-zero entries of its K_ii and M_ii (for find_mirror) and the interface matrices a span of
+    # it adds.
+    representatives: list[
+        tuple[int, tuple[SparseRows, ...], tuple[np.ndarray, np.ndarray], tuple[int, int]]
+    ] = []
     added: list[tuple[np.ndarray, np.ndarray]] = []
     span_type = np.zeros(len(internal), dtype=np.int64)
     # From the centre outwards: the interior type's representative is then a central span, the one
@@ -429,26 +473,29 @@ def reduce_system(system: LinearSystem, cutoff: float, far_cutoff: float | None 
         dofs = internal[s]
         columns = np.r_[dofs, b[coupled[s]]]  # internal, then coupled interface
         rows = (submatrix(K, dofs, columns), submatrix(M, dofs, columns))
-        for t, (_, rep, _) in enumerate(representatives):
+        for t, (_, rep, _, _) in enumerate(representatives):
             if all(x.same(r) for x, r in zip(rows, rep, strict=True)):
                 span_type[s] = t
                 break
         else:
             span_type[s] = len(types)
             (K_ii, K_ic), (M_ii, M_ic) = (np.hsplit(x.toarray(), [dofs.size]) for x in rows)
+            # K_ii's and M_ii's non-zero entries, counted in the rows (each entry once, as in toarray)
+            nonzeros = tuple(int(np.count_nonzero(x.data[x.col < dofs.size])) for x in rows)
             eigen = None
-            for r, _, rep_eigen in representatives:  # another type's mirror image?
+            for r, _, rep_eigen, rep_nonzeros in representatives:  # another type's mirror image?
                 rep = types[span_type[r]]
                 axis = 0.5 * (r + s + 1) * span_length
                 dense = (rep.stiffness_internal, rep.mass_internal)
-                mirror = find_mirror(system, internal[r], dofs, axis, dense, rows, codes)
+                mirror = find_mirror(system, internal[r], dofs, axis, dense, rows, codes, rep_nonzeros)
                 if mirror is not None:
                     eigen = (rep_eigen[0], mirror.apply(rep_eigen[1]))
                     break
             if eigen is None:  # its own mirror image?
-                mirror = find_mirror(system, dofs, dofs, (s + 0.5) * span_length, (K_ii, M_ii), rows, codes)
+                axis = (s + 0.5) * span_length
+                mirror = find_mirror(system, dofs, dofs, axis, (K_ii, M_ii), rows, codes, nonzeros)
                 eigen = _eigensolution(K_ii, M_ii, mirror)
-            representatives.append((s, rows, eigen))
+            representatives.append((s, rows, eigen, nonzeros))
             stiffness = rows[0]
             inside = (stiffness.col < dofs.size) & (stiffness.data != 0.0)
             width = int(np.abs(stiffness.row - stiffness.col)[inside].max(initial=0))
@@ -470,7 +517,7 @@ def reduce_system(system: LinearSystem, cutoff: float, far_cutoff: float | None 
         system=system,
         cutoff=float(cutoff),
         span_type=span_type,
-        representative=np.array([r for r, _, _ in representatives], dtype=np.int64),
+        representative=np.array([r for r, *_ in representatives], dtype=np.int64),
         types=tuple(types),
         internal=internal,
         coupled=coupled,
