@@ -11,6 +11,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+import scipy.linalg as sla
 import scipy.sparse as sp
 from conftest import assert_recorded
 from scipy.sparse.csgraph import breadth_first_order
@@ -397,3 +398,39 @@ def test_mirror_signs_are_those_of_the_walk_down_the_tree(system):
         assert np.array_equal(signs, _tree_walk_signs(*args))
         assert np.array_equal((signs[i] * signs[j])[keep], (flip[i] * flip[j])[keep])
     assert signs[0] == signs[n // 3] == 1.0  # each component's first DOF
+
+
+def test_a_configuration_s_interface_responses_are_the_band_solves(system):
+    """A configuration's S⁻¹ columns and dropper responses (built from S⁻¹) are the band solves of their
+    right-hand sides: the pantograph's unit forces to the last bit, the droppers' to rounding."""
+    reduced = reduce_system(system, 300.0, 50.0)
+    builder = span_modes.prepare_reduced(reduced, DT, near_spans=1).builder
+    for configuration in ((1,), (0, 3), (-1,)):
+        out = builder.build(configuration)
+        factor = (out["schur_band"], False)
+        n_drop, n_b = out["dropper_interface"].shape
+        H = np.zeros((n_drop, n_b))
+        H[builder.d_rows, builder.d_cols[builder.d_valid]] = (builder.d_c - builder.c_m * out["dropper_h"])[
+            builder.d_valid
+        ]
+        X = sla.cho_solve_banded(factor, H.T)
+        scale = np.abs(X).max()
+        np.testing.assert_allclose(out["dropper_interface"], X.T, rtol=0.0, atol=1e-13 * scale)
+        for p, span in enumerate(configuration):
+            own = reduced.coupled[span] if span >= 0 else np.zeros(0, dtype=np.int64)
+            unit = np.zeros((n_b, own.size))
+            unit[own, np.arange(own.size)] = 1.0
+            assert np.array_equal(
+                out["element_interface"][p, : own.size], sla.cho_solve_banded(factor, unit).T
+            )
+            np.testing.assert_allclose(
+                out["dropper_element_interface"][p, : own.size], X[own], rtol=0.0, atol=1e-13 * scale
+            )
+        # G: each span's droppers' own block (its kept modes; and with the residual), and H X
+        G, G_full = H @ X, H @ X
+        for span, k in enumerate(out["kept"]):
+            q = slice(builder.start[span], builder.start[span + 1])
+            G[q, q] += builder.modal_block[span, k]
+            G_full[q, q] += builder.modal_block[span, k] + builder.residual_block[span, k]
+        for name, expected in (("dropper_modal_flexibility", G), ("dropper_flexibility", G_full)):
+            np.testing.assert_allclose(out[name], expected, rtol=0.0, atol=1e-13 * np.abs(expected).max())

@@ -439,13 +439,11 @@ class _ConfigurationBuilder:
         kept = kept_modes(reduced, self.near_spans, configuration)
         sum_coupling = self.far_sum.copy()
         dropper_h = self.far_h.copy()
-        G, G_full = self.far_blocks.copy()
-        for s in np.flatnonzero(kept != self.far):
+        near = np.flatnonzero(kept != self.far)
+        for s in near:
             c, q, k = reduced.coupled[s], slice(start[s], start[s + 1]), kept[s]
             sum_coupling[np.ix_(c, c)] += self.span_sum[s, k] - self.span_sum[s, self.far[s]]
             dropper_h[q] = self.span_h[s, k]
-            G[q, q] = self.modal_block[s, k]
-            G_full[q, q] = self.modal_block[s, k] + self.residual_block[s, k]
         schur = c_k * reduced.interface_stiffness + c_m * reduced.interface_mass - c_m**2 * sum_coupling
         factor = sla.cholesky_banded(band_storage(0.5 * (schur + schur.T), width), check_finite=False)
         out = dict(kept=kept, schur_band=factor, dropper_h=dropper_h)
@@ -455,25 +453,26 @@ class _ConfigurationBuilder:
         # B_c - c_m H on the interface: a unit dropper force's right-hand side (≤ n_c entries a row)
         H = np.zeros((n_drop, n_b))
         H[self.d_rows, self.d_cols[self.d_valid]] = (self.d_c - c_m * dropper_h)[self.d_valid]
+        # S⁻¹: a band solve of each unit force (each column a solve of its own, so the pantographs' columns
+        # are those of their unit forces), fewer than the droppers' right-hand sides; then X = S⁻¹ Hᵀ, stored
+        # as its transpose H S⁻ᵀ, the droppers' interface responses.
+        inverse = sla.cho_solve_banded((factor, False), np.eye(n_b), check_finite=False)
+        Xt = H @ inverse.T
         owns = [reduced.coupled[s] if s >= 0 else np.zeros(0, dtype=np.int64) for s in configuration]
-        units = []  # each pantograph's span: unit forces at its coupled interface DOFs
-        for own in owns:
-            unit = np.zeros((n_b, own.size))
-            unit[own, np.arange(own.size)] = 1.0
-            units.append(unit)
-        X = sla.cho_solve_banded((factor, False), np.c_[(H.T, *units)], check_finite=False)
         out["element_interface"] = np.zeros((len(owns), nc_max, n_b))
         out["dropper_element_interface"] = np.zeros((len(owns), nc_max, n_drop))
-        column = n_drop
-        for p, own in enumerate(owns):
-            out["element_interface"][p, : own.size] = X[:, column : column + own.size].T
-            out["dropper_element_interface"][p, : own.size] = X[own, :n_drop]
-            column += own.size
-        X = X[:, :n_drop]
-        out["dropper_interface"] = X.T
-        HX = H @ X
-        out["dropper_modal_flexibility"] = G + HX
-        out["dropper_flexibility"] = G_full + HX
+        for p, own in enumerate(owns):  # each pantograph's span: unit forces at its coupled interface DOFs
+            out["element_interface"][p, : own.size] = inverse[:, own].T
+            out["dropper_element_interface"][p, : own.size] = Xt[:, own].T
+        out["dropper_interface"] = Xt
+        HX = H @ Xt.T
+        # G of the far spans' blocks, then the near spans': far_blocks as they are, not copied and patched
+        out["dropper_modal_flexibility"] = self.far_blocks[0] + HX
+        out["dropper_flexibility"] = self.far_blocks[1] + HX
+        for s in near:
+            q, k = slice(start[s], start[s + 1]), kept[s]
+            out["dropper_modal_flexibility"][q, q] = self.modal_block[s, k] + HX[q, q]
+            out["dropper_flexibility"][q, q] = (self.modal_block[s, k] + self.residual_block[s, k]) + HX[q, q]
         return out
 
 
