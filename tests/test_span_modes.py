@@ -398,6 +398,11 @@ def test_mirror_signs_are_those_of_the_walk_down_the_tree(system):
         assert np.array_equal(signs, _tree_walk_signs(*args))
         assert np.array_equal((signs[i] * signs[j])[keep], (flip[i] * flip[j])[keep])
     assert signs[0] == signs[n // 3] == 1.0  # each component's first DOF
+    alone = ((i != n // 2) & (j != n // 2)) | (i == j)  # a DOF without couplings: a component of its own
+    args = (i[alone], j[alone], a[alone], (flip[i] * flip[j] * a)[alone], n)
+    signs = reduction._mirror_signs(*args)
+    assert signs[n // 2] == 1.0
+    assert np.array_equal((signs[i] * signs[j])[alone], (flip[i] * flip[j])[alone])
 
 
 def test_a_configuration_s_interface_responses_are_the_band_solves(system):

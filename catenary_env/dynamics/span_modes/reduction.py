@@ -356,7 +356,9 @@ def _mirror_signs(i: np.ndarray, j: np.ndarray, a: np.ndarray, b: np.ndarray, n:
     while root < n:
         order, parent = breadth_first_order(graph, root, directed=False)
         child = order[1:]
-        ratio = np.asarray(graph[parent[child], child]).ravel()
+        # (a DOF without strong entries is a component of its own, without children: scipy gives an empty
+        # sparse matrix, not an array, for an empty index)
+        ratio = np.asarray(graph[parent[child], child]).ravel() if child.size else np.zeros(0)
         if np.any(ratio == 0.0):
             return None
         # σ_v = σ_parent(v) r_v is the product of the ratios (±1, so exact in any order) on the path from v
