@@ -15,7 +15,6 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-import scipy.sparse.linalg as spla
 
 from ..fem.track_order import compliances
 from ..model.definition import PantographDefinition
@@ -95,12 +94,6 @@ def frame_force(system: LinearSystem, pantograph: PantographDefinition, uplift_f
     element, shape, height = system.contact_wire.locate(x)
     dofs = system.contact_wire.z_dofs[element]  # (P, 4): the contact wire's vertical coordinates are free
     compliance = compliances(system.stiffness, dofs, shape)
-    if compliance is None:  # too wide a band, even renumbered: SuperLU
-        points = np.broadcast_to(np.arange(x.size)[:, None], dofs.shape)
-        loads = np.zeros((system.n_dofs, x.size))
-        np.add.at(loads, (dofs, points), shape)
-        response = spla.splu(system.stiffness.tocsc()).solve(loads)
-        compliance = np.einsum("pk,pk->p", shape, response[dofs, points])
     series = (
         compliance + 1.0 / lay.catenary.contact_stiffness + sum(1.0 / k for k in pantograph.stiffnesses[1:])
     )

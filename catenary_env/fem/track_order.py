@@ -149,14 +149,15 @@ def _cuthill_mckee_rank(matrix: sp.csr_matrix) -> np.ndarray:
     return rank
 
 
-def compliances(matrix: sp.spmatrix, dofs: np.ndarray, loads: np.ndarray) -> np.ndarray | None:
-    """hₚᵀ A⁻¹ hₚ for load vectors hₚ, A symmetric positive definite and banded in track order.
+def compliances(matrix: sp.spmatrix, dofs: np.ndarray, loads: np.ndarray) -> np.ndarray:
+    """hₚᵀ A⁻¹ hₚ for load vectors hₚ, A symmetric and banded in track order.
 
-    hₚ holds ``loads[p]`` at the indices ``dofs[p]`` (repeated indices add up). A narrow band (at most
-    :data:`MAX_CHOLESKY_BAND`) is factorised by banded Cholesky (LAPACK ``pbtrf``), A = L Lᵀ, and
-    hᵀ A⁻¹ h = |L⁻¹ h|², one forward solve from the first loaded index on (L⁻¹ h is zero before it): on
-    the presets' sections a quarter of the time of SuperLU's factorisation and two solves with every load
-    (docs/performance.md, 'Speed'). The same numbers as a general solver's, to rounding.
+    hₚ holds ``loads[p]`` at the indices ``dofs[p]`` (repeated indices add up). A positive definite A of
+    a narrow band (at most :data:`MAX_CHOLESKY_BAND`, in track order or renumbered) is factorised by banded
+    Cholesky (LAPACK ``pbtrf``), A = L Lᵀ, and hᵀ A⁻¹ h = |L⁻¹ h|², one forward solve from the first loaded
+    index on (L⁻¹ h is zero before it): on the presets' sections a quarter of the time of SuperLU's
+    factorisation and a solve with every load (docs/performance.md, 'Speed'), which any other A takes. The
+    same numbers either way, to rounding.
 
     Parameters
     ----------
@@ -167,33 +168,33 @@ def compliances(matrix: sp.spmatrix, dofs: np.ndarray, loads: np.ndarray) -> np.
 
     Returns
     -------
-    ndarray (P,), or None
-        None where the band is wider than :data:`MAX_CHOLESKY_BAND` or A is not positive definite
-        (the caller then solves otherwise).
+    ndarray (P,)
     """
     csr = sp.csr_matrix(matrix)
     coo = csr.tocoo()
     n = coo.shape[0]
-    row, col = coo.row, coo.col
+    points = np.broadcast_to(np.arange(dofs.shape[0])[:, None], dofs.shape)
+    row, col, at = coo.row, coo.col, dofs
     if np.max(np.abs(row - col), initial=0) > MAX_CHOLESKY_BAND:
         # Stitch wires reach far along the track: renumber by reverse Cuthill-McKee (once per pattern), which
         # keeps the section's order along the track but narrows the band (some 70 to 20).
         rank = _RENUMBERINGS.get((csr.indptr, csr.indices), lambda: _cuthill_mckee_rank(csr))
-        row, col, dofs = rank[row], rank[col], rank[dofs]
+        row, col, at = rank[row], rank[col], rank[dofs]
     lower = row >= col
     row, col = row[lower], col[lower]
     band = int(np.max(row - col, initial=0))
-    if band > MAX_CHOLESKY_BAND:
-        return None
-    # LAPACK's lower band storage of A: entry (i, j), i >= j, at row i - j of column j.
-    ab = np.zeros((band + 1, n), order="F")
-    ab[row - col, col] = coo.data[lower]
-    factor, info = lapack.dpbtrf(ab, lower=1, overwrite_ab=1)
-    if info != 0:
-        return None
-    first = int(np.min(dofs))
-    points = np.broadcast_to(np.arange(dofs.shape[0])[:, None], dofs.shape)
-    rhs = np.zeros((n - first, dofs.shape[0]))
-    np.add.at(rhs, (dofs - first, points), loads)
-    z, _ = lapack.dtbtrs(factor[:, first:], rhs, uplo="L")
-    return np.einsum("ip,ip->p", z, z)
+    if band <= MAX_CHOLESKY_BAND:
+        # LAPACK's lower band storage of A: entry (i, j), i >= j, at row i - j of column j.
+        ab = np.zeros((band + 1, n), order="F")
+        ab[row - col, col] = coo.data[lower]
+        factor, info = lapack.dpbtrf(ab, lower=1, overwrite_ab=1)
+        if info == 0:
+            first = int(np.min(at))
+            rhs = np.zeros((n - first, dofs.shape[0]))
+            np.add.at(rhs, (at - first, points), loads)
+            z, _ = lapack.dtbtrs(factor[:, first:], rhs, uplo="L")
+            return np.einsum("ip,ip->p", z, z)
+    rhs = np.zeros((n, dofs.shape[0]))
+    np.add.at(rhs, (dofs, points), loads)
+    response = spla.splu(csr.tocsc()).solve(rhs)
+    return np.einsum("ip,ip->p", rhs, response)
