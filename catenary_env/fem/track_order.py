@@ -4,12 +4,13 @@ Nodes are numbered along the track (:mod:`catenary_env.fem.layout`), so once the
 unknowns are each sorted by their position along the track, every entry of a matrix lies near its
 diagonal, and a narrow band holds them all. LAPACK's banded LU (``gbsv``, partial pivoting within the
 band) then needs no ordering analysis and no fill outside the band: on the 20-span benchmark's
-shape-finding Jacobian (14,000 unknowns, band 25 + 23) it takes 9 ms, SuperLU 20 to 40 ms.
+shape-finding Jacobian (14,000 unknowns, band 25 + 23) it takes 4.3 ms, SuperLU 8 to 12 ms in the same
+order and 21 ms in its own (COLAMD; one BLAS thread, 2026-12-05).
 
 A few couplings that reach far along the track widen the band without filling it: a stitch wire's
 bars span several metres, and the stitched section's band is some 280 wide. Banded LU's work grows as
-the square of the band (126 ms there), while SuperLU in the same order keeps its fill within the
-profile (37 ms); they meet near a band of 60, hence :data:`MAX_BAND`.
+the square of the band (44 ms there), while SuperLU in the same order keeps its fill within the
+profile (10 ms); they meet near a band of 60, hence :data:`MAX_BAND`.
 
 A Newton loop solves with one sparsity pattern many times, so the solver is planned for a pattern
 once: where each stored entry goes in the band (or in the permuted matrix).
