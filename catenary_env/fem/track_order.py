@@ -134,7 +134,7 @@ class TrackOrderSolver:
 
 MAX_CHOLESKY_BAND = 32
 """Widest band (sub-diagonals) of a symmetric matrix that :func:`compliances` factorises by banded Cholesky,
-in track order or renumbered; beyond it, banded Cholesky's work (and its fill's denormal numbers) exceed a
+in track order or renumbered; beyond it, banded Cholesky's work (growing as the square of the band) exceeds a
 sparse solver's."""
 
 
