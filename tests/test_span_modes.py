@@ -7,6 +7,7 @@ cut-off rises.
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 
 import numpy as np
@@ -144,6 +145,37 @@ def test_compiled_loop_equals_the_numpy_loop(system, benchmark_pantograph_defini
     assert a.slack_steps == b.slack_steps
     assert_recorded(recorded_passages, "span_modes_300_numpy", a)
     assert_recorded(recorded_passages, "span_modes_300_numba", b)
+
+
+def test_the_compiled_loop_pairs_spans_of_one_type_and_kept_modes():
+    pytest.importorskip("numba")
+    from catenary_env.dynamics.span_modes import kernels
+
+    Arrays = collections.namedtuple("Arrays", "span_type kept")
+    span_type = np.array([3, 1, 0, 0, 0, 0, 0, 2, 0, 4])
+    kept = np.array([[81, 356, 356, 356, 81, 81, 81, 81, 81, 81]])
+    partner = np.zeros(span_type.size, dtype=np.int64)
+    kernels._span_pairs(Arrays(span_type, kept), 0, partner)
+    assert partner.tolist() == [-1, -1, 3, -2, 5, -2, 8, -1, -2, -1]
+    # pairs share a type and a number of kept modes, every span is in one pair or alone
+    for s, z in enumerate(partner):
+        if z >= 0:
+            assert span_type[s] == span_type[z] and kept[0, s] == kept[0, z] and partner[z] == -2
+    assert np.sum(partner >= 0) == np.sum(partner == -2)
+
+
+@pytest.mark.parametrize("count", [1, 3, 4, 7, 9])
+def test_the_paired_row_products_are_the_row_products(count):
+    pytest.importorskip("numba")
+    from catenary_env.dynamics.span_modes import kernels
+
+    rng = np.random.default_rng(count)
+    rows, x, z = rng.standard_normal((count, 83)), rng.standard_normal(90), rng.standard_normal(90)
+    out_x, out_z = np.full(count + 2, 7.0), np.full(count + 2, 7.0)
+    kernels._rows_dot_pair(rows, count, x, z, 83, out_x, out_z)
+    np.testing.assert_allclose(out_x[:count], rows @ x[:83], rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(out_z[:count], rows @ z[:83], rtol=1e-13, atol=1e-13)
+    assert np.all(out_x[count:] == 7.0) and np.all(out_z[count:] == 7.0)
 
 
 def test_fidelities_name_both_models():

@@ -193,6 +193,57 @@ def _rows_dot(rows, first, count, x, m, out):  # pragma: no cover - compiled
 
 
 @inlined
+def _rows_dot_pair(rows, count, x, z, m, out_x, out_z):  # pragma: no cover - compiled
+    """out_x[k] = rows[k, :m] · x[:m] and out_z[k] = rows[k, :m] · z[:m] for k < count: two spans of one type
+    in one pass over their rows, four rows a pass (each row read once for both spans)."""
+    k = 0
+    while k + 4 <= count:
+        r0, r1, r2, r3 = rows[k], rows[k + 1], rows[k + 2], rows[k + 3]
+        s0 = s1 = s2 = s3 = 0.0
+        t0 = t1 = t2 = t3 = 0.0
+        for i in range(m):
+            xi = x[i]
+            zi = z[i]
+            a0, a1, a2, a3 = r0[i], r1[i], r2[i], r3[i]
+            s0 += a0 * xi
+            s1 += a1 * xi
+            s2 += a2 * xi
+            s3 += a3 * xi
+            t0 += a0 * zi
+            t1 += a1 * zi
+            t2 += a2 * zi
+            t3 += a3 * zi
+        out_x[k], out_x[k + 1], out_x[k + 2], out_x[k + 3] = s0, s1, s2, s3
+        out_z[k], out_z[k + 1], out_z[k + 2], out_z[k + 3] = t0, t1, t2, t3
+        k += 4
+    while k < count:
+        r = rows[k]
+        s0 = t0 = 0.0
+        for i in range(m):
+            s0 += r[i] * x[i]
+            t0 += r[i] * z[i]
+        out_x[k], out_z[k] = s0, t0
+        k += 1
+
+
+@inlined
+def _span_pairs(d, c, partner):  # pragma: no cover - compiled
+    """Pair the spans of configuration c that share a type and a number of kept modes: partner[s] is the
+    later span of s's pair, -1 for a span without one, -2 for the later span of a pair."""
+    n = partner.size
+    for s in range(n):
+        partner[s] = -1
+    for s in range(n):
+        if partner[s] != -1:
+            continue
+        for s2 in range(s + 1, n):
+            if partner[s2] == -1 and d.span_type[s2] == d.span_type[s] and d.kept[c, s2] == d.kept[c, s]:
+                partner[s] = s2
+                partner[s2] = -2
+                break
+
+
+@inlined
 def _rows_axpy(rows, g, count, out, m):  # pragma: no cover - compiled
     """out[:m] += Σ_k g[k] rows[k, :m] over k < count, four rows per pass over out."""
     k = 0
@@ -315,6 +366,9 @@ def run_steps(d, points, st, configuration, first, stop):  # pragma: no cover - 
     g_c = np.zeros((n_spans, nc_max))  # e_c - c_m x_c of each span's coupled interface DOFs
     x_c = np.zeros((n_spans, nc_max))  # x_c
     sums = np.zeros(nc_max)  # a span's sums over its coupled interface DOFs
+    span_sums = np.zeros((n_spans, nc_max))  # every span's, summed into the interface in track order
+    partner = np.full(n_spans, -1, dtype=np.int64)  # the spans paired in this configuration
+    _span_pairs(d, configuration[first], partner)
     g_dc = np.zeros((n_c, n_drop))
     gm_dc = np.zeros((n_c, n_drop))
     c_cc = np.zeros((n_c, n_c))
@@ -336,6 +390,7 @@ def run_steps(d, points, st, configuration, first, stop):  # pragma: no cover - 
         c = configuration[k]
         if c != st.configuration[0]:
             _configure(d, st, c)
+            _span_pairs(d, c, partner)
             for i in range(n_c):
                 current[i] = -1
         for i in range(n_c):
@@ -352,17 +407,28 @@ def run_steps(d, points, st, configuration, first, stop):  # pragma: no cover - 
         e_pad[width : width + n_b] = e_vec[n_q:]
         for r in range(n_b):
             work_b[r] = _dot(band[r], e_pad[r:], 2 * width + 1)
-        for s in range(n_spans):
+        for s in range(n_spans):  # a pair of spans of one type in one pass over its rows
+            z = partner[s]
+            if z == -2:
+                continue
             t = d.span_type[s]
             off = d.modal_offset[s]
             m = d.kept[c, s]
             e_s = e_vec[off : off + m]
             nc = d.n_coupled[t]
-            _rows_dot(d.weighted_coupling[t], 0, nc, e_s, m, sums)
-            for j in range(nc):
-                work_b[d.coupled[s, j]] += sums[j]
             first_q = d.dropper_start[s]
-            _rows_dot(d.type_dropper_q[t], 0, d.dropper_start[s + 1] - first_q, e_s, m, dl_known[first_q:])
+            n_dq = d.dropper_start[s + 1] - first_q
+            if z < 0:
+                _rows_dot(d.weighted_coupling[t], 0, nc, e_s, m, span_sums[s])
+                _rows_dot(d.type_dropper_q[t], 0, n_dq, e_s, m, dl_known[first_q:])
+            else:
+                e_z = e_vec[d.modal_offset[z] : d.modal_offset[z] + m]
+                _rows_dot_pair(d.weighted_coupling[t], nc, e_s, e_z, m, span_sums[s], span_sums[z])
+                first_z = d.dropper_start[z]
+                _rows_dot_pair(d.type_dropper_q[t], n_dq, e_s, e_z, m, dl_known[first_q:], dl_known[first_z:])
+        for s in range(n_spans):
+            for j in range(d.n_coupled[d.span_type[s]]):
+                work_b[d.coupled[s, j]] += span_sums[s, j]
         _band_solve((d.schur_columns[c], d.schur_rows[c], d.schur_inverse_diagonal[c]), work_b, x_b)
         for s in range(n_spans):
             t = d.span_type[s]
