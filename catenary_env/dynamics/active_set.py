@@ -284,9 +284,15 @@ def settle_in_place(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, 
             dl = dl_known[q]
             for p in range(n_c):
                 dl += g_dc[p, q] * f[p]
-            for i in range(m):
-                dl += G[q, idx[i]] * lam[i]
-            elastic[q] = N0[q] + kappa[q] * dl - rate_term[q]  # spring plus damping share
+            elastic[q] = dl
+        # G is symmetric (to rounding): the slack droppers' rows, each read along, not their columns, whose
+        # every entry lies on a cache line of its own (docs/performance.md, 'Speed').
+        for i in range(m):
+            row = G[idx[i]]
+            for q in range(n_drop):
+                elastic[q] += row[q] * lam[i]
+        for q in range(n_drop):
+            elastic[q] = N0[q] + kappa[q] * elastic[q] - rate_term[q]  # spring plus damping share
             new_slack[q] = elastic[q] < 0.0
             changed = changed or new_slack[q] != slack[q]
         if not changed:

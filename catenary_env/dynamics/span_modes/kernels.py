@@ -3,7 +3,9 @@ the same steps).
 
 Each step:
 
-1. The interface part of K̂⁻¹ M e: x_b = S⁻¹ (Y e_b + Σ_s M_cq w e_q), w = 1 - c_m / D.
+1. The interface part of K̂⁻¹ M e: x_b = S⁻¹ (Y e_b + Σ_s M_cq w e_q), w = 1 - c_m / D; two spans of one
+   type and as many kept modes in one pass over the type's rows (:func:`_span_pairs`), so that each row
+   is read once for both (docs/performance.md, 'Speed').
 2. The droppers' elongations and the contact point's displacement from x_b and e, without the
    modes' full solution: B x = (B_q D⁻¹) e_q + (B_q D⁻¹ M_qc)(e_c - c_m x_c) + B_c x_c.
 3. The contact force and the slack droppers (:func:`~catenary_env.dynamics.active_set.settle_in_place`).
@@ -374,6 +376,7 @@ def run_steps(d, points, st, configuration, first, stop):  # pragma: no cover - 
     c_cc = np.zeros((n_c, n_c))
     gap_known = np.zeros(n_c)
     dl_known = np.zeros(n_drop)
+    b_new = np.zeros(n_drop)  # the droppers' new elongations B u over the kept modes
     rate_term = np.zeros(n_drop)
     work = settle_workspace(n_c, n_drop)
     lam, idx, elastic, f = work[2], work[3], work[4], work[6]
@@ -514,8 +517,11 @@ def run_steps(d, points, st, configuration, first, stop):  # pragma: no cover - 
             bu = dl_known[q]
             for p in range(n_c):
                 bu += gm_dc[p, q] * f[p]
-            for qq in range(n_slack):
-                bu += mflex[q, idx[qq]] * lam[qq]
+            b_new[q] = bu
+        for qq in range(n_slack):  # symmetric: rows, as in settle_in_place
+            _axpy(mflex[idx[qq]], lam[qq], b_new, n_drop)
+        for q in range(n_drop):
+            bu = b_new[q]
             du = bu - st.Bu[q]
             ba = a0 * du - a2 * st.Bv[q] - a3 * st.Ba[q]
             st.Bv[q] = a1 * du - a4 * st.Bv[q] - a5 * st.Ba[q]
