@@ -12,6 +12,12 @@ to rounding (else the two commits are different models, and the ratio compares u
     python benchmarks/bench_against.py e91dc2e^                   # the second speed step's baseline
     python benchmarks/bench_against.py HEAD~3 --presets benchmark --rounds 5
     python benchmarks/bench_against.py e91dc2e^ --one-blas-thread # both with OPENBLAS_NUM_THREADS=1
+    python benchmarks/bench_against.py e91dc2e^ --design optimum  # the design studies' optima
+
+``--design optimum`` evaluates, instead of each preset's level design, the best-known design of its design
+problem (B1 on the benchmark catenary, SW1 on the stitched one, found by the design studies): the kind of
+design an optimiser evaluates late in a run, whose droppers are often slack (B1's optimum some 13 slack
+droppers a step, the level design 1.4), which the level design does not show.
 
 Both run in the caller's environment: an old commit that let numpy's BLAS start a thread per core runs so
 here too, as it did for its users; ``--one-blas-thread`` gives both one BLAS thread. The CPU time counts
@@ -35,19 +41,35 @@ ROOT = Path(__file__).resolve().parent.parent
 ONE_THREAD = {name: "1" for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")}
 
 
-def child(preset: str, evaluations: int) -> None:
-    """In a timed process: the study evaluation of ``preset``'s level design, once untimed, then
-    ``evaluations`` times; prints one JSON line. Uses only what every commit since the span-mode model has."""
+OPTIMUM_PROBLEMS = {"benchmark": "B1", "stitched": "SW1"}
+"""The design problem whose best-known design ``--design optimum`` evaluates on each preset."""
+
+
+def optimum(preset: str) -> list[list[float]]:
+    """The dropper positions and contact-wire offsets (m) of the best-known design of ``preset``'s problem,
+    as this checkout has it."""
+    from catenary_env.problems import get_problem
+
+    problem = get_problem(OPTIMUM_PROBLEMS[preset])
+    design = problem.design(problem.best_known.x)
+    return [list(design.dropper_positions), list(design.contact_wire_offsets)]
+
+
+def child(preset: str, evaluations: int, design_json: str) -> None:
+    """In a timed process: the study evaluation of ``preset``'s level design (``design_json`` "level") or of
+    the design given (its dropper positions and offsets, m), once untimed, then ``evaluations`` times; prints
+    one JSON line. Uses only what every commit since the span-mode model has."""
     import catenary_env
-    from catenary_env.model.design import level_design
+    from catenary_env.model.design import Design, level_design
     from catenary_env.model.presets import load_catenary, load_pantograph
     from catenary_env.pipeline import Fidelity, evaluate
 
     catenary = load_catenary(preset)
     pantograph = load_pantograph(catenary.pantograph)
+    given = json.loads(design_json)
 
     def one() -> float:
-        design = level_design(catenary)
+        design = level_design(catenary) if given == "level" else Design(*map(tuple, given))
         return evaluate(catenary, pantograph, design, 300 / 3.6, Fidelity(), 170.0).statistics.std
 
     one()
@@ -65,7 +87,8 @@ def child(preset: str, evaluations: int) -> None:
 def timed(tree: Path, preset: str, args: argparse.Namespace) -> dict[str, float | str]:
     """One process of ``tree``'s code: its medians and σ."""
     env = dict(os.environ, PYTHONPATH=str(tree), **(ONE_THREAD if args.one_blas_thread else {}))
-    command = [sys.executable, __file__, "--child", preset, str(args.evaluations)]
+    design = json.dumps("level" if args.design == "level" else optimum(preset))
+    command = [sys.executable, __file__, "--child", preset, str(args.evaluations), design]
     done = subprocess.run(command, env=env, cwd=tree, capture_output=True, text=True)
     if done.returncode != 0:
         raise RuntimeError(f"the evaluation in {tree} failed:\n{done.stderr[-2000:]}")
@@ -84,11 +107,17 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=3, help="processes of each commit (default 3)")
     parser.add_argument("--evaluations", type=int, default=5, help="timed evaluations a process (default 5)")
     parser.add_argument("--one-blas-thread", action="store_true", help="both with one BLAS thread")
+    parser.add_argument(
+        "--design",
+        choices=["level", "optimum"],
+        default="level",
+        help="each preset's level design (default) or its design problem's best-known one",
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON summary")
-    parser.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
+    parser.add_argument("--child", nargs=3, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
-        child(args.child[0], int(args.child[1]))
+        child(args.child[0], int(args.child[1]), args.child[2])
         return 0
     if args.baseline is None:
         parser.error("baseline: give the commit to compare with, e.g. e91dc2e^")
@@ -123,10 +152,12 @@ def main() -> int:
             "sigma": [this[0]["sigma"], base[0]["sigma"]],
         }
     if args.json:
-        print(json.dumps({"baseline": commit, "one_blas_thread": args.one_blas_thread, "presets": summary}))
+        print(json.dumps({"baseline": commit, "one_blas_thread": args.one_blas_thread, "design": args.design,
+                          "presets": summary}))  # fmt: skip
         return 0
     threads = "one BLAS thread each" if args.one_blas_thread else "the caller's environment"
-    print(f"evaluate (level design, 300 km/h, study fidelity, 170 N): this checkout against {commit[:10]}, "
+    which = "level design" if args.design == "level" else "best-known design of B1 / SW1"
+    print(f"evaluate ({which}, 300 km/h, study fidelity, 170 N): this checkout against {commit[:10]}, "
           f"{args.rounds} alternate processes of each, median of {args.evaluations} evaluations in each, "
           f"{threads}")  # fmt: skip
     for preset, row in summary.items():
