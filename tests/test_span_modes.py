@@ -447,9 +447,8 @@ def test_a_configuration_s_interface_responses_are_the_band_solves(system):
         factor = (out["schur_band"], False)
         n_drop, n_b = out["dropper_interface"].shape
         H = np.zeros((n_drop, n_b))
-        H[builder.d_rows, builder.d_cols[builder.d_valid]] = (builder.d_c - builder.c_m * out["dropper_h"])[
-            builder.d_valid
-        ]
+        rows = np.repeat(np.arange(n_drop), np.diff(builder.d_pointers))
+        H[rows, builder.d_cols] = (builder.d_c - builder.c_m * out["dropper_h"])[builder.d_valid]
         X = sla.cho_solve_banded(factor, H.T)
         scale = np.abs(X).max()
         np.testing.assert_allclose(out["dropper_interface"], X.T, rtol=0.0, atol=1e-13 * scale)

@@ -38,6 +38,7 @@ from typing import NamedTuple
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
 
 from ..active_set import Droppers
 from ..linear_system import LinearSystem
@@ -311,21 +312,40 @@ class _Residuals:
             self.modal.append(phi[:, :k] @ phi[:, :k].T + above_far)
             self.near.append(rest @ rest.T)
             self.far.append(self.near[-1] + above_far)
-        self.span_droppers = []
+        # A span whose rows equal its type's first span's (every interior span: the same droppers on the
+        # same DOFs) shares that array, so that the products with them are made once a type (``of_rows``).
+        self.span_droppers, first = [], {}
         for s in range(n_spans):
-            sel = self.selected[reduced.span_type[s]]
+            t = reduced.span_type[s]
+            sel = self.selected[t]
             position = np.full(reduced.internal[s].size, -1)
             position[sel] = np.arange(sel.size)
             B_s = submatrix(B, np.flatnonzero(d_span == s), reduced.internal[s])
             rows = np.zeros((B_s.shape[0], sel.size))
             np.add.at(rows, (B_s.row, position[B_s.col]), B_s.data)
+            if t in first and np.array_equal(first[t], rows):
+                rows = first[t]
+            first.setdefault(t, rows)
             self.span_droppers.append(rows)
+        self._products: dict[tuple, np.ndarray] = {}
+
+    def of_rows(self, reduced: ReducedSystem, span: int, name: str, make) -> np.ndarray:  # noqa: ANN001
+        """``make(rows, t)`` of the span's dropper rows and type t, made once for the spans that share
+        their rows (``name`` tells the products apart)."""
+        rows = self.span_droppers[span]
+        key = (name, id(rows))
+        if key not in self._products:
+            self._products[key] = make(rows, reduced.span_type[span])
+        return self._products[key]
 
     def dropper_block(self, reduced: ReducedSystem, span: int, near: bool) -> np.ndarray:
         """The span's droppers' residual flexibility B R Bᵀ, m/N."""
-        t = reduced.span_type[span]
-        rows = self.span_droppers[span]
-        return rows @ (self.near[t] if near else self.far[t]) @ rows.T
+        return self.of_rows(
+            reduced,
+            span,
+            f"block {near}",
+            lambda rows, t: rows @ (self.near[t] if near else self.far[t]) @ rows.T,
+        )
 
 
 def kept_modes(reduced: ReducedSystem, near_spans: int, configuration: tuple[int, ...]) -> np.ndarray:
@@ -407,9 +427,10 @@ class _ConfigurationBuilder:
                     )
                 self.span_sum[s, k], self.span_h[s, k], self.modal_block[s, k] = of_type[t, k]
                 self.residual_block[s, k] = residual.dropper_block(reduced, s, near=k == types[t].n_modes)
-        self.d_cols = modes["coupled"][d_span]
+        # The droppers' interface columns, a row each: the pattern of the sparse B_c - c_m H in build
         self.d_valid = np.arange(nc_max)[None, :] < modes["n_coupled"][reduced.span_type[d_span]][:, None]
-        self.d_rows = np.repeat(np.arange(n_drop), nc_max)[self.d_valid.ravel()]
+        self.d_cols = modes["coupled"][d_span][self.d_valid]
+        self.d_pointers = np.r_[0, np.cumsum(self.d_valid.sum(axis=1))]
         # Every span with its far modes; a configuration adds its near spans' differences.
         self.far = far = np.array([types[t].far_modes for t in reduced.span_type])
         n_b = reduced.interface.size
@@ -450,14 +471,16 @@ class _ConfigurationBuilder:
         out["schur_columns"], out["schur_rows"], out["schur_inverse_diagonal"] = band_rows(factor)
         Y = reduced.interface_mass - c_m * sum_coupling
         out["interface_rhs_rows"] = np.where(self.inside, Y[np.arange(n_b)[:, None], self.diagonals], 0.0)
-        # B_c - c_m H on the interface: a unit dropper force's right-hand side (≤ n_c entries a row)
-        H = np.zeros((n_drop, n_b))
-        H[self.d_rows, self.d_cols[self.d_valid]] = (self.d_c - c_m * dropper_h)[self.d_valid]
+        # B_c - c_m H on the interface: a unit dropper force's right-hand side, ≤ n_c entries a row (sparse:
+        # its products below then cost n_c, not n_b, multiply-adds an entry of theirs)
+        H = sp.csr_matrix(
+            ((self.d_c - c_m * dropper_h)[self.d_valid], self.d_cols, self.d_pointers), (n_drop, n_b)
+        )
         # S⁻¹: a band solve of each unit force (each column a solve of its own, so the pantographs' columns
         # are those of their unit forces), fewer than the droppers' right-hand sides; then X = S⁻¹ Hᵀ, stored
         # as its transpose H S⁻ᵀ, the droppers' interface responses.
         inverse = sla.cho_solve_banded((factor, False), np.eye(n_b), check_finite=False)
-        Xt = H @ inverse.T
+        Xt = H @ np.ascontiguousarray(inverse.T)
         owns = [reduced.coupled[s] if s >= 0 else np.zeros(0, dtype=np.int64) for s in configuration]
         out["element_interface"] = np.zeros((len(owns), nc_max, n_b))
         out["dropper_element_interface"] = np.zeros((len(owns), nc_max, n_drop))
@@ -465,7 +488,7 @@ class _ConfigurationBuilder:
             out["element_interface"][p, : own.size] = inverse[:, own].T
             out["dropper_element_interface"][p, : own.size] = Xt[:, own].T
         out["dropper_interface"] = Xt
-        HX = H @ Xt.T
+        HX = H @ np.ascontiguousarray(Xt.T)
         # G of the far spans' blocks, then the near spans': far_blocks as they are, not copied and patched
         out["dropper_modal_flexibility"] = self.far_blocks[0] + HX
         out["dropper_flexibility"] = self.far_blocks[1] + HX
@@ -530,9 +553,11 @@ def _element_arrays(
         el_modal[els] = np.where(both, residual.modal[t][safe[:, :, None], safe[:, None, :]], 0.0)
         drops = np.flatnonzero(d_span == s)
         el_droppers[els, : drops.size] = drops
-        rows = residual.span_droppers[s].T
-        el_res[els, :, : drops.size] = np.where(ok[:, :, None], (R @ rows)[safe], 0.0)
-        el_drop_modal[els, :, : drops.size] = np.where(ok[:, :, None], (residual.modal[t] @ rows)[safe], 0.0)
+        to_droppers = residual.of_rows(
+            reduced, s, "elements", lambda rows, t: (residual.near[t] @ rows.T, residual.modal[t] @ rows.T)
+        )
+        el_res[els, :, : drops.size] = np.where(ok[:, :, None], to_droppers[0][safe], 0.0)
+        el_drop_modal[els, :, : drops.size] = np.where(ok[:, :, None], to_droppers[1][safe], 0.0)
     return dict(
         element_span=el_span,
         element_local=el_local,
