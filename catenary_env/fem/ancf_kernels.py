@@ -13,11 +13,13 @@ contracted nor reassociated. It has to be: shape-finding's Newton iterations sto
 the residual (docs/model.md, 'Shape-finding'), a sum of element forces far larger than it, and any other
 rounding of the force moves the shape within that floor, and σ by some 1e-9 (the strains summed in another
 order did; with the force to the bit, the σ of the studies' designs stay within 5e-11 of the numpy code's,
-as before). The tangent,
-which only steers Newton's steps and the linearisation, is summed in another order, in two stages per
-Gauss point: M = ∇²W G (4 × 8, from the hessian's 4 × 4 in the strains e = (r_s, L r_ss)), then w Gᵀ M, the
-upper triangle only (the tangent is symmetric), some 140 multiplications a point rather than the 320 of the
-table of products.
+as before). The tangent, which only steers Newton's steps and the linearisation, is summed in another
+order, in two stages per Gauss point: M = ∇²W G (4 × 8, from the hessian's 4 × 4 in the strains
+e = (r_s, L r_ss)), then w Gᵀ M, the upper triangle only (the tangent is symmetric), some 140
+multiplications a point rather than the 320 of the table of products.
+
+In an evaluation of B1's reference design, cable_state's nine calls take 6.4 ms rather than 12.9 ms; the
+tangent's four, 1.1 to 1.2 ms each, are most of it.
 
 numba is optional: :mod:`~catenary_env.fem.ancf` imports this module only where numba is installed.
 """
