@@ -17,6 +17,7 @@ Element vectors are ordered q = (x_i, z_i, x'_i, z'_i, x_j, z_j, x'_j, z'_j).
 
 from __future__ import annotations
 
+from types import ModuleType
 from typing import NamedTuple
 
 import numpy as np
@@ -116,6 +117,7 @@ def cable_state(
     tangent: bool = True,
     dlength: bool = False,
     axial_material: bool = True,
+    backend: str = "auto",
 ) -> CableState:
     """Internal forces, tangent stiffness and length derivative of cable elements.
 
@@ -143,12 +145,74 @@ def cable_state(
         stiffness of the axial force N (I - t tᵀ) / |r_s| and the bending terms: the tangent of a wire
         whose axial force does not change (the transverse-only linearisation, docs/model.md, 'Modelling
         choices').
+    backend : str
+        One of :data:`BACKENDS`: ``"numba"``, the compiled loop (:mod:`~catenary_env.fem.ancf_kernels`,
+        several times faster), ``"numpy"``, the numpy code below, or ``"auto"``, numba where it is
+        installed. The two agree to rounding.
     """
+    if backend not in ("auto", *BACKENDS):
+        raise ValueError(f"backend = {backend!r}: one of auto, {', '.join(BACKENDS)}")
+    kernels = _compiled_kernels() if backend != "numpy" else None
+    if kernels is None:
+        if backend == "numba":
+            raise ImportError("backend='numba' needs numba: pip install numba")
+        return _numpy_state(q, length, axial_stiffness, bending_stiffness, tangent, dlength, axial_material)
+    n_el = q.shape[0]
+    force = np.empty((n_el, 8))
+    stiffness = np.empty((n_el if tangent else 0, 8, 8))
+    force_dlength = np.empty((n_el if dlength else 0, 8))
+    kernels.cable_state_in_place(
+        np.ascontiguousarray(q, dtype=float),
+        np.ascontiguousarray(length, dtype=float),
+        np.ascontiguousarray(_scale(length)[0]),
+        np.ascontiguousarray(axial_stiffness, dtype=float),
+        np.ascontiguousarray(bending_stiffness, dtype=float),
+        _S0,
+        _FORCE_TABLE,
+        axial_material,
+        force,
+        stiffness,
+        force_dlength,
+    )
+    return CableState(force, stiffness if tangent else None, force_dlength if dlength else None)
+
+
+BACKENDS = ("numba", "numpy")
+"""The backends of :func:`cable_state`; ``"auto"`` takes numba where it is installed."""
+
+
+def _scale(length: np.ndarray) -> np.ndarray:
+    """The factors of the scaled coordinates, q̃_k = scale_k q_k: 1 / L on positions, 1 on gradients, 1/m;
+    shape (4, E). Both backends take them from here: numpy's power L⁻¹ differs from 1 / L in the last bit
+    for some L, in a way that depends on the array's shape (its vectorised loops), and the compiled loop's
+    force is the numpy code's to the bit (:mod:`~catenary_env.fem.ancf_kernels`)."""
+    return length ** -_POSITION[:, None]
+
+
+def _compiled_kernels() -> ModuleType | None:
+    """:mod:`catenary_env.fem.ancf_kernels`, or None where numba is not installed."""
+    try:
+        from . import ancf_kernels
+    except ImportError:
+        return None
+    return ancf_kernels
+
+
+def _numpy_state(
+    q: np.ndarray,
+    length: np.ndarray,
+    axial_stiffness: np.ndarray,
+    bending_stiffness: np.ndarray,
+    tangent: bool,
+    dlength: bool,
+    axial_material: bool,
+) -> CableState:
+    """:func:`cable_state` in numpy, vectorised over the elements (the reference of the compiled loop)."""
     # Arrays keep the element axis last, so that every elementwise operation runs over all
     # elements at once; per Gauss point vectors have shape (G, 2, E).
     n_el = q.shape[0]
     L = length
-    scale = L ** -_POSITION[:, None]  # q̃_k = scale_k q_k, (4, E)
+    scale = _scale(L)
     qs = q.T.reshape(4, 2, n_el) * scale[:, None, :]
     strain = (_S0.reshape(-1, 4) @ qs.reshape(4, -1)).reshape(-1, 2, 2, n_el)  # (G, r_s | L r_ss, 2, E)
     rs = strain[:, 0]
