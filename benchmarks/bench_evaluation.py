@@ -5,7 +5,8 @@ responses, or the span-mode model's reduction and Schur complements), the pantog
 statistics of the "benchmark" preset at 300 km/h, Δt = 1 ms, on the study mesh, for both models in
 the same run, alternately (docs/performance.md, 'Model fidelities'). Prints the median over several
 runs of each phase, the real-time factor, the ratio of the two models, the memory peak, the time for
-several section lengths, and the exact passage's compiled (numba) and numpy backends on the same
+several section lengths (their runs in turn, with each run's cost per span against the main section's run
+of the same round), and the exact passage's compiled (numba) and numpy backends on the same
 prepared system, alternately, with the largest difference of their contact forces.
 
 Scaling: a step of the exact model costs in proportion to the DOFs, so its passage grows as the
@@ -328,20 +329,34 @@ def measure_models(
     args: argparse.Namespace, fidelities: dict[str, Fidelity], spans: list[int]
 ) -> dict[str, dict[int, dict[str, float]]]:
     """Medians of each model's phases per section length; the exact model on the main section (and
-    ``--exact-spans``) only. The models run alternately, so that the machine's drift hits both."""
+    ``--exact-spans``) only. The models and the section lengths run alternately, a run of each in turn, so
+    that the machine's drift hits all of them (the cost per span of one length against another's is a
+    ratio of runs made minutes apart otherwise)."""
     results: dict[str, dict[int, dict[str, float]]] = {model: {} for model in MODELS}
-    for n in spans:
-        models = MODELS if n in args.exact_spans or n == args.main_spans else ("span-modes",)
-        runs: dict[str, list[dict[str, float]]] = {model: [] for model in models}
-        for _ in range(args.runs):  # the models alternately, so that the machine's drift hits both
-            for model in models:
-                runs[model].append(
+    models_of = {
+        n: MODELS if n in args.exact_spans or n == args.main_spans else ("span-modes",) for n in spans
+    }
+    runs = {(n, model): [] for n in spans for model in models_of[n]}
+    for _ in range(args.runs):
+        for n in spans:
+            for model in models_of[n]:
+                runs[n, model].append(
                     one_evaluation(args.preset, n, args.speed, args.uplift, fidelities[model], args.backend)
                 )
-        for model in models:
-            med = {key: statistics.median(r[key] for r in runs[model]) for key in runs[model][0]}
-            med["min_total"] = min(r["total"] for r in runs[model])
-            med["max_total"] = max(r["total"] for r in runs[model])
+    for n in spans:
+        for model in models_of[n]:
+            med = {key: statistics.median(r[key] for r in runs[n, model]) for key in runs[n, model][0]}
+            med["min_total"] = min(r["total"] for r in runs[n, model])
+            med["max_total"] = max(r["total"] for r in runs[n, model])
+            # each run's cost per span against the main section's run of the same round
+            main_runs = runs.get((args.main_spans, model))
+            if main_runs is not None and n != args.main_spans:
+                ratios = [
+                    (r["total"] / n) / (m["total"] / args.main_spans)
+                    for r, m in zip(runs[n, model], main_runs, strict=True)
+                ]
+                med["per_span_ratio"] = statistics.median(ratios)
+                med["per_span_ratio_range"] = (min(ratios), max(ratios))
             med["real_time_factor"] = med["total"] / med["simulated_time"]
             med["passage_per_step_us"] = 1e6 * med["passage"] / (med["steps"] - 1)
             med["cpu_passage_per_step_us"] = 1e6 * med["cpu_passage"] / (med["steps"] - 1)
@@ -358,6 +373,22 @@ def measure_models(
                     flush=True,
                 )
     return results
+
+
+def print_scaling(results: dict[str, dict[int, dict[str, float]]], main_spans: int) -> None:
+    """Each model's total time per span at each section length, and against the main section's, run by run."""
+    for model in MODELS:
+        print(
+            f"scaling, {model} (total per span, s): "
+            + ", ".join(f"{n}: {med['total'] / n:.3f}" for n, med in sorted(results[model].items()))
+        )
+        for n, med in sorted(results[model].items()):
+            if "per_span_ratio" in med:
+                low, high = med["per_span_ratio_range"]
+                print(
+                    f"  cost per span at {n} spans / at {main_spans}, run by run: median "
+                    f"{med['per_span_ratio']:.2f} ({low:.2f}-{high:.2f})"
+                )
 
 
 def main() -> int:
@@ -505,6 +536,7 @@ def main() -> int:
                     "passage_median_s": med["passage"],
                     "per_span_s": med["total"] / n,
                     "passage_per_step_us": med["passage_per_step_us"],
+                    "per_span_over_main_section": med.get("per_span_ratio"),
                 }
                 for n, med in sorted(results[model].items())
             }
@@ -543,11 +575,7 @@ def main() -> int:
         f"memory: traced peak {peak['span-modes']:.0f} MiB (span-modes), {peak['exact']:.0f} MiB (exact); "
         f"process max RSS {rss:.0f} MiB"
     )
-    for model in MODELS:
-        print(
-            f"scaling, {model} (total per span, s): "
-            + ", ".join(f"{n}: {med['total'] / n:.3f}" for n, med in sorted(results[model].items()))
-        )
+    print_scaling(results, args.main_spans)
     if comparison is not None:
         print(
             f"exact passage, {args.main_spans} spans, {comparison['runs']} run(s) each, alternately: "
