@@ -313,8 +313,8 @@ class _Residuals:
             self.near.append(rest @ rest.T)
             self.far.append(self.near[-1] + above_far)
         # A span whose rows equal its type's first span's (every interior span: the same droppers on the
-        # same DOFs) shares that array, so that the products with them are made once a type (``of_rows``).
-        self.span_droppers, first = [], {}
+        # same DOFs) stands for it in the products with them, made once (``of_rows``): ``rows_of``.
+        self.span_droppers, self.rows_of, first = [], np.arange(n_spans), {}
         for s in range(n_spans):
             t = reduced.span_type[s]
             sel = self.selected[t]
@@ -323,19 +323,18 @@ class _Residuals:
             B_s = submatrix(B, np.flatnonzero(d_span == s), reduced.internal[s])
             rows = np.zeros((B_s.shape[0], sel.size))
             np.add.at(rows, (B_s.row, position[B_s.col]), B_s.data)
-            if t in first and np.array_equal(first[t], rows):
-                rows = first[t]
-            first.setdefault(t, rows)
+            if t in first and np.array_equal(self.span_droppers[first[t]], rows):
+                self.rows_of[s] = first[t]
+            first.setdefault(t, s)
             self.span_droppers.append(rows)
-        self._products: dict[tuple, np.ndarray] = {}
+        self._products: dict[tuple[str, int], np.ndarray] = {}
 
     def of_rows(self, reduced: ReducedSystem, span: int, name: str, make) -> np.ndarray:  # noqa: ANN001
-        """``make(rows, t)`` of the span's dropper rows and type t, made once for the spans that share
-        their rows (``name`` tells the products apart)."""
-        rows = self.span_droppers[span]
-        key = (name, id(rows))
+        """``make(rows, t)`` of the span's dropper rows and type t, made once for the spans whose rows are
+        the same (``name`` tells the products apart)."""
+        key = (name, int(self.rows_of[span]))
         if key not in self._products:
-            self._products[key] = make(rows, reduced.span_type[span])
+            self._products[key] = make(self.span_droppers[span], reduced.span_type[span])
         return self._products[key]
 
     def dropper_block(self, reduced: ReducedSystem, span: int, near: bool) -> np.ndarray:
