@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .butterworth import butterworth_sections, zero_phase
+
 if TYPE_CHECKING:
     from ..dynamics.newmark import Trajectory
 
@@ -105,15 +107,11 @@ def lowpass(force: np.ndarray, time_step: float, cutoff: float = CUTOFF_HZ) -> n
     cutoff : float
         -3 dB frequency of the applied (forward-backward) filter, Hz.
     """
-    # Imported here, not at the top: importing scipy.signal takes 1.5 s (it loads scipy.stats).
-    from scipy import signal
-
     # Forward and backward passes square the magnitude response; set each pass's cut-off so that
     # the applied (zero-phase) filter is -3 dB at ``cutoff``, the usual meaning of a cut-off
     # frequency. A pass at ``cutoff`` itself would put the applied filter at -6 dB there.
     per_pass = cutoff / (np.sqrt(2.0) - 1.0) ** (1.0 / (2 * FILTER_ORDER))
-    sos = signal.butter(FILTER_ORDER, per_pass, btype="low", fs=1.0 / time_step, output="sos")
-    return signal.sosfiltfilt(sos, force)
+    return zero_phase(butterworth_sections(FILTER_ORDER, per_pass, 1.0 / time_step), force)
 
 
 def contact_statistics(
