@@ -4,8 +4,12 @@ Runs passages of a preset's level design under Linux ``perf`` (sampling the proc
 with the loop compiled afresh with numba's debug lines, and maps the samples that fall in the loop's machine
 code onto the source lines they were compiled from. A helper that is inlined into the loop shows as its own
 lines (``kernels.py:44`` is ``_dot``'s body, wherever it is called from); one that is called shows as the line
-of its call. It finds what timing the parts one at a time cannot: work that no part of the arithmetic names
-(calls, reference counting, scalar fallbacks of vectorised loops).
+of its call. numba's debug lines name the loop's own file for every line, also for the shared helpers of other
+modules that it inlines (the Newmark update of ``dynamics/newmark.py`` showed as lines of ``kernels.py``
+under the element's responses): a line number that falls in a compiled function of more than one file is
+printed with each file's text, ``or`` between them. It finds what timing the parts one at a time cannot:
+work that no part of the arithmetic names (calls, reference counting, scalar fallbacks of vectorised
+loops).
 
     python benchmarks/profile_loop.py                          # span-mode loop, benchmark catenary
     python benchmarks/profile_loop.py --model exact --passages 5
@@ -18,14 +22,16 @@ release may break it; the simulator does not depend on it. Prints the share of t
 line, the line's text, and the loop's share of all samples (most of the rest is the compilation).
 
 The shares are a guide, not a measurement: the debug lines cost the compiler some of its freedom, and a
-sample lands on the instruction after the one that stalled (the element's responses, some 3 % of a step when
-timed by running them twice, take 12 % here). Confirm what it points at by timing the loop with and without.
+sample lands on the instruction after the one that stalled. Confirm what it points at by timing the loop with
+and without.
 """
 
 from __future__ import annotations
 
 import argparse
+import ast
 import collections
+import importlib.util
 import os
 import shutil
 import subprocess
@@ -70,6 +76,46 @@ def child(args: argparse.Namespace) -> None:
     (out / "address").write_text(str(library.get_pointer_to_function(result.fndesc.mangled_name)))
     for _ in range(args.passages):
         passage()
+
+
+COMPILED_DECORATORS = {"compilable", "inlined", "njit", "register_jitable"}
+"""Decorators that compile a function into the loop: the loop's own helpers and the shared ones."""
+
+
+def _compiled_lines(module: str) -> dict[Path, list[tuple[int, int]]]:
+    """Each file whose compiled functions the loop ``module`` may inline: the loop's own file and those of
+    the modules it imports relatively, with the line ranges of their compiled functions' code (after the
+    docstring)."""
+    own = Path(importlib.util.find_spec(module).origin)
+    package = module.rpartition(".")[0]
+    files = [own]
+    for node in ast.walk(ast.parse(own.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.level > 0:
+            base = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
+            spec = importlib.util.find_spec(f"{base}.{node.module}" if node.module else base)
+            if spec is not None and spec.origin and spec.origin.endswith(".py"):
+                files.append(Path(spec.origin))
+    ranges: dict[Path, list[tuple[int, int]]] = {}
+    for path in files:
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.FunctionDef) and any(
+                (d.func if isinstance(d, ast.Call) else d).id in COMPILED_DECORATORS
+                for d in node.decorator_list
+                if isinstance(d.func if isinstance(d, ast.Call) else d, ast.Name)
+            ):
+                body = node.body[1:] if ast.get_docstring(node) is not None else node.body
+                ranges.setdefault(path, []).append((body[0].lineno, node.end_lineno or body[0].lineno))
+    return ranges
+
+
+def _texts(number: int, ranges: dict[Path, list[tuple[int, int]]]) -> str:
+    """The source of line ``number`` in every file where a compiled function holds it."""
+    texts = [
+        f"{path.name}: {path.read_text().splitlines()[number - 1].strip()[:70]}"
+        for path, spans in ranges.items()
+        if any(first <= number <= last for first, last in spans)
+    ]
+    return "  or  ".join(texts) if texts else "(no compiled function holds this line)"
 
 
 def _symbol_size(obj: Path) -> tuple[int, int]:
@@ -148,12 +194,11 @@ def main() -> int:
     total = sum(offsets.values())
     print(f"{args.model} loop, {args.preset}, {args.spans} spans, {args.passages} passages: {total} samples"
           f" in the loop, {100 * total / len(ips):.0f} % of the process's")  # fmt: skip
+    ranges = _compiled_lines(MODULES[args.model])
     for place, count in lines.most_common(args.top):
-        path, _, number = place.rpartition(":")
-        text = "(no source line)"
-        if number.isdigit() and Path(path).is_file():
-            text = Path(path).read_text().splitlines()[int(number) - 1].strip()
-        print(f"{100 * count / total:5.1f} %  {Path(path).name}:{number:<5} {text[:90]}")
+        number = place.rpartition(":")[2]
+        text = _texts(int(number), ranges) if number.isdigit() else "(no source line)"
+        print(f"{100 * count / total:5.1f} %  line {number:<5} {text}")
     return 0
 
 
