@@ -82,10 +82,16 @@ COMPILED_DECORATORS = {"compilable", "inlined", "njit", "register_jitable"}
 """Decorators that compile a function into the loop: the loop's own helpers and the shared ones."""
 
 
-def _compiled_lines(module: str) -> dict[Path, list[tuple[int, int]]]:
-    """Each file whose compiled functions the loop ``module`` may inline: the loop's own file and those of
-    the modules it imports relatively, with the line ranges of their compiled functions' code (after the
-    docstring)."""
+def _decorator_name(decorator: ast.expr) -> str:
+    """``njit`` for ``@njit`` and ``@njit(...)``; "" for an attribute or anything else."""
+    target = decorator.func if isinstance(decorator, ast.Call) else decorator
+    return target.id if isinstance(target, ast.Name) else ""
+
+
+def _compiled_lines(module: str) -> dict[Path, tuple[list[str], list[tuple[int, int]]]]:
+    """Each file whose compiled functions the loop ``module`` may inline (the loop's own file and those of
+    the modules it imports relatively): its lines, and the line ranges of its compiled functions' code
+    (after the docstring)."""
     own = Path(importlib.util.find_spec(module).origin)
     package = module.rpartition(".")[0]
     files = [own]
@@ -95,25 +101,27 @@ def _compiled_lines(module: str) -> dict[Path, list[tuple[int, int]]]:
             spec = importlib.util.find_spec(f"{base}.{node.module}" if node.module else base)
             if spec is not None and spec.origin and spec.origin.endswith(".py"):
                 files.append(Path(spec.origin))
-    ranges: dict[Path, list[tuple[int, int]]] = {}
+    compiled: dict[Path, tuple[list[str], list[tuple[int, int]]]] = {}
     for path in files:
-        for node in ast.walk(ast.parse(path.read_text())):
+        source = path.read_text()
+        ranges = []
+        for node in ast.walk(ast.parse(source)):
             if isinstance(node, ast.FunctionDef) and any(
-                (d.func if isinstance(d, ast.Call) else d).id in COMPILED_DECORATORS
-                for d in node.decorator_list
-                if isinstance(d.func if isinstance(d, ast.Call) else d, ast.Name)
+                _decorator_name(d) in COMPILED_DECORATORS for d in node.decorator_list
             ):
                 body = node.body[1:] if ast.get_docstring(node) is not None else node.body
-                ranges.setdefault(path, []).append((body[0].lineno, node.end_lineno or body[0].lineno))
-    return ranges
+                ranges.append((body[0].lineno, node.end_lineno or body[0].lineno))
+        if ranges:
+            compiled[path] = (source.splitlines(), ranges)
+    return compiled
 
 
-def _texts(number: int, ranges: dict[Path, list[tuple[int, int]]]) -> str:
+def _texts(number: int, compiled: dict[Path, tuple[list[str], list[tuple[int, int]]]]) -> str:
     """The source of line ``number`` in every file where a compiled function holds it."""
     texts = [
-        f"{path.name}: {path.read_text().splitlines()[number - 1].strip()[:70]}"
-        for path, spans in ranges.items()
-        if any(first <= number <= last for first, last in spans)
+        f"{path.name}: {lines[number - 1].strip()[:70]}"
+        for path, (lines, ranges) in compiled.items()
+        if any(first <= number <= last for first, last in ranges)
     ]
     return "  or  ".join(texts) if texts else "(no compiled function holds this line)"
 
@@ -194,10 +202,10 @@ def main() -> int:
     total = sum(offsets.values())
     print(f"{args.model} loop, {args.preset}, {args.spans} spans, {args.passages} passages: {total} samples"
           f" in the loop, {100 * total / len(ips):.0f} % of the process's")  # fmt: skip
-    ranges = _compiled_lines(MODULES[args.model])
+    compiled = _compiled_lines(MODULES[args.model])
     for place, count in lines.most_common(args.top):
         number = place.rpartition(":")[2]
-        text = _texts(int(number), ranges) if number.isdigit() else "(no source line)"
+        text = _texts(int(number), compiled) if number.isdigit() else "(no source line)"
         print(f"{100 * count / total:5.1f} %  line {number:<5} {text}")
     return 0
 
