@@ -19,6 +19,7 @@ from scipy.sparse.csgraph import breadth_first_order
 
 from catenary_env.dynamics import exact as exact_model
 from catenary_env.dynamics import span_modes
+from catenary_env.dynamics.contact_point import start_train
 from catenary_env.dynamics.linear_system import linearise
 from catenary_env.dynamics.protocol import Passage
 from catenary_env.dynamics.span_modes import reduction
@@ -155,13 +156,16 @@ def test_the_compiled_loop_pairs_spans_of_one_type_and_kept_modes():
     span_type = np.array([3, 1, 0, 0, 0, 0, 0, 2, 0, 4])
     kept = np.array([[81, 356, 356, 356, 81, 81, 81, 81, 81, 81]])
     partner = np.zeros(span_type.size, dtype=np.int64)
-    kernels._span_pairs(Arrays(span_type, kept), 0, partner)
+    kernels._span_pairs(Arrays(span_type, kept), 0, partner, span_type.size)
     assert partner.tolist() == [-1, -1, 3, -2, 5, -2, 8, -1, -2, -1]
     # pairs share a type and a number of kept modes, every span is in one pair or alone
     for s, z in enumerate(partner):
         if z >= 0:
             assert span_type[s] == span_type[z] and kept[0, s] == kept[0, z] and partner[z] == -2
     assert np.sum(partner >= 0) == np.sum(partner == -2)
+    # with the first 5 spans stepped (the others held ahead of the wave front), only they are paired
+    kernels._span_pairs(Arrays(span_type, kept), 0, partner, 5)
+    assert partner.tolist() == [-1, -1, 3, -2, -1, -1, -1, -1, -1, -1]
 
 
 @pytest.mark.parametrize("count", [1, 3, 4, 7, 9])
@@ -470,3 +474,61 @@ def test_a_configuration_s_interface_responses_are_the_band_solves(system):
             G_full[q, q] += builder.modal_block[span, k] + builder.residual_block[span, k]
         for name, expected in (("dropper_modal_flexibility", G), ("dropper_flexibility", G_full)):
             np.testing.assert_allclose(out[name], expected, rtol=0.0, atol=1e-13 * np.abs(expected).max())
+
+
+# The spans ahead of the wave front (docs/performance.md, 'The spans ahead of the wave front'): held at rest,
+# they change the passage by rounding only.
+
+
+@pytest.fixture(scope="module")
+def long_system(benchmark_catenary):
+    """Ten spans of the default model (transverse-only wires) on a coarse mesh: the front, at 460 km/h, is
+    some six spans from the section's end when the pantograph starts."""
+    layout = build_layout(benchmark_catenary, level_design(benchmark_catenary), 10, 1.5, 3.0)
+    return linearise(find_shape(layout))
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_holding_the_spans_ahead_of_the_front_changes_the_passage_by_rounding_only(
+    long_system, benchmark_pantograph_definition, backend
+):
+    if backend == "numba":
+        pytest.importorskip("numba")
+    from catenary_env.dynamics.span_modes.passage import FRONT_MARGIN, _stepped_spans
+
+    prepared = span_modes.prepare_reduced(reduce_system(long_system, 200.0), DT, near_spans=1)
+    passage = Passage.one_pantograph(benchmark_pantograph_definition, 190.0, SPEED, backend=backend)
+    held = span_modes.run(prepared, passage)
+    every = span_modes.run(prepared, passage, front_margin=None)
+    started = start_train(long_system, passage, prepared.constants)
+    stepped = _stepped_spans(long_system, started, 10, FRONT_MARGIN)
+    assert stepped[0] == 4 and stepped[-1] == 10 and np.all(np.diff(stepped) >= 0)  # the case holds spans
+    assert every.slack_steps > 0 and held.slack_steps == every.slack_steps
+    assert np.abs(held.contact_force - every.contact_force).max() < 1e-7
+    assert np.abs(held.support_uplift - every.support_uplift).max() < 1e-12
+    assert np.abs(held.dropper_force_min - every.dropper_force_min).max() < 1e-7
+    # too close to the front the held spans do change it: the margin is not idle
+    near = span_modes.run(prepared, passage, front_margin=0.0)
+    assert np.abs(near.contact_force - every.contact_force).max() > 1e-3
+
+
+def test_extensible_wires_step_every_span(system, benchmark_pantograph_definition):
+    from catenary_env.dynamics.span_modes.passage import FRONT_MARGIN, _stepped_spans, front_speed
+
+    catenary = system.static.layout.catenary
+    assert catenary.modelling.linearisation == "extensible"
+    assert front_speed(catenary) == pytest.approx(catenary.contact_wire.wave_speed)
+    prepared = span_modes.prepare_reduced(reduce_system(system, 200.0), DT, near_spans=1)
+    passage = Passage.one_pantograph(benchmark_pantograph_definition, 190.0, SPEED)
+    started = start_train(system, passage, prepared.constants)
+    assert np.all(_stepped_spans(system, started, 5, FRONT_MARGIN) == 5)
+
+
+def test_the_interface_a_span_reaches_runs_in_track_order(long_system):
+    reduced = reduce_system(long_system, 200.0)
+    end = span_modes.preparation.interface_end(reduced)
+    assert end[-1] == reduced.interface.size and np.all(np.diff(end) > 0)
+    for s in range(end.size - 1):  # what spans 0 .. s hold is theirs alone; the next support is not
+        later = np.concatenate(reduced.coupled[s + 1 :])
+        assert later.min() == end[s]
+        assert np.isin(reduced.coupled[s], np.arange(end[s])).any()

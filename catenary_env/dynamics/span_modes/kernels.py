@@ -229,16 +229,16 @@ def _rows_dot_pair(rows, count, x, z, m, out_x, out_z):  # pragma: no cover - co
 
 
 @inlined
-def _span_pairs(d, c, partner):  # pragma: no cover - compiled
-    """Pair the spans of configuration c that share a type and a number of kept modes: partner[s] is the
-    later span of s's pair, -1 for a span without one, -2 for the later span of a pair."""
+def _span_pairs(d, c, partner, stepped):  # pragma: no cover - compiled
+    """Pair the first ``stepped`` spans of configuration c that share a type and a number of kept modes:
+    partner[s] is the later span of s's pair, -1 for a span without one, -2 for the later span of a pair."""
     n = partner.size
     for s in range(n):
         partner[s] = -1
-    for s in range(n):
+    for s in range(stepped):
         if partner[s] != -1:
             continue
-        for s2 in range(s + 1, n):
+        for s2 in range(s + 1, stepped):
             if partner[s2] == -1 and d.span_type[s2] == d.span_type[s] and d.kept[c, s2] == d.kept[c, s]:
                 partner[s] = s2
                 partner[s2] = -2
@@ -333,10 +333,14 @@ def _cross_compliance(d, points, k, forces, p_b, c_cc):  # pragma: no cover - co
 
 
 @njit(cache=True, fastmath=FAST)
-def run_steps(d, points, st, configuration, first, stop):  # pragma: no cover - compiled  # noqa: C901
+def run_steps(d, points, st, configuration, stepped, first, stop):  # pragma: no cover - compiled  # noqa: C901
     """Steps ``first`` to ``stop - 1`` of the passage, updating the SpanModeState ``st`` in place.
 
-    ``points`` holds the contact points' arrays, ``configuration`` (steps,) each step's configuration."""
+    ``points`` holds the contact points' arrays, ``configuration`` (steps,) each step's configuration and
+    ``stepped`` (steps,) the spans each step advances, the first ones: those beyond lie ahead of the wave
+    front, at rest to rounding, and are held there with the interface DOFs only they reach (step 1's
+    band solve is then the leading block of S's factor, that of the spans stepped with the next support
+    held; docs/performance.md, 'The spans ahead of the wave front')."""
     ps = st.pantographs
     n_c = len(points)
     cf = d.coefficients
@@ -370,7 +374,7 @@ def run_steps(d, points, st, configuration, first, stop):  # pragma: no cover - 
     sums = np.zeros(nc_max)  # a span's sums over its coupled interface DOFs
     span_sums = np.zeros((n_spans, nc_max))  # every span's, summed into the interface in track order
     partner = np.full(n_spans, -1, dtype=np.int64)  # the spans paired in this configuration
-    _span_pairs(d, configuration[first], partner)
+    paired = -1  # the spans stepped when they were paired
     g_dc = np.zeros((n_c, n_drop))
     gm_dc = np.zeros((n_c, n_drop))
     c_cc = np.zeros((n_c, n_c))
@@ -393,9 +397,15 @@ def run_steps(d, points, st, configuration, first, stop):  # pragma: no cover - 
         c = configuration[k]
         if c != st.configuration[0]:
             _configure(d, st, c)
-            _span_pairs(d, c, partner)
+            paired = -1
             for i in range(n_c):
                 current[i] = -1
+        n_s = stepped[k]
+        if n_s != paired:
+            _span_pairs(d, c, partner, n_s)
+            paired = n_s
+        n_bs = d.interface_end[n_s - 1]  # the interface DOFs stepped
+        n_ds = d.dropper_start[n_s]  # the droppers stepped
         for i in range(n_c):
             el = points[i].element[k]
             if el >= 0 and el != current[i]:
@@ -408,9 +418,9 @@ def run_steps(d, points, st, configuration, first, stop):  # pragma: no cover - 
         # 1. Interface part of K̂⁻¹ M e, and the droppers' modal part of step 2, span by span.
         band = d.interface_rhs_rows[c]
         e_pad[width : width + n_b] = e_vec[n_q:]
-        for r in range(n_b):
+        for r in range(n_bs):
             work_b[r] = _dot(band[r], e_pad[r:], 2 * width + 1)
-        for s in range(n_spans):  # a pair of spans of one type in one pass over its rows
+        for s in range(n_s):  # a pair of spans of one type in one pass over its rows
             z = partner[s]
             if z == -2:
                 continue
@@ -429,17 +439,21 @@ def run_steps(d, points, st, configuration, first, stop):  # pragma: no cover - 
                 _rows_dot_pair(d.weighted_coupling[t], nc, e_s, e_z, m, span_sums[s], span_sums[z])
                 first_z = d.dropper_start[z]
                 _rows_dot_pair(d.type_dropper_q[t], n_dq, e_s, e_z, m, dl_known[first_q:], dl_known[first_z:])
-        for s in range(n_spans):
+        for s in range(n_s):
             for j in range(d.n_coupled[d.span_type[s]]):
                 work_b[d.coupled[s, j]] += span_sums[s, j]
-        _band_solve((d.schur_columns[c], d.schur_rows[c], d.schur_inverse_diagonal[c]), work_b, x_b)
-        for s in range(n_spans):
+        _band_solve(
+            (d.schur_columns[c, :n_bs], d.schur_rows[c, :n_bs], d.schur_inverse_diagonal[c, :n_bs]),
+            work_b[:n_bs],
+            x_b[:n_bs],
+        )
+        for s in range(n_s):
             t = d.span_type[s]
             for j in range(d.n_coupled[t]):
                 x_c[s, j] = x_b[d.coupled[s, j]]
                 g_c[s, j] = e_vec[n_q + d.coupled[s, j]] - c_m * x_c[s, j]
         # 2. Droppers' elongations of u_known = K̂⁻¹ M e + y.
-        for q in range(n_drop):
+        for q in range(n_ds):
             sd = d.dropper_span[q]
             td = d.span_type[sd]
             nc = d.n_coupled[td]
@@ -459,19 +473,19 @@ def run_steps(d, points, st, configuration, first, stop):  # pragma: no cover - 
                 continue
             gap_known[i], c_cc[i, i] = _contact_point(
                 d, points[i], ps[i], k, c, el, rows_q[i], rows_c[i], m_qc[i], comp[i], g_full[i], g_modal[i],
-                e_vec, y, x_b, g_c, h_q[i], g_dc[i], gm_dc[i], rhs_p, y_known[i],
+                e_vec, y, x_b, g_c, h_q[i], g_dc[i, :n_ds], gm_dc[i, :n_ds], rhs_p, y_known[i],
             )  # fmt: skip
         if n_c > 1:
             _cross_compliance(d, points, k, forces, p_b, c_cc)
         # 3. Contact forces and slack droppers.
         n_slack, resolved = settle_in_place(
             contact,
-            st.slack,
+            st.slack[:n_ds],
             gap_known,
             c_cc,
-            g_dc,
-            dl_known,
-            rate_term,
+            g_dc[:, :n_ds],
+            dl_known[:n_ds],
+            rate_term[:n_ds],
             kh,
             d.droppers,
             flex,
@@ -483,12 +497,12 @@ def run_steps(d, points, st, configuration, first, stop):  # pragma: no cover - 
                 continue
             h = points[p].shape[k]
             pb = p_b[p]
-            for i in range(n_b):
+            for i in range(n_bs):
                 x_b[i] += f[p] * (pb[0, i] * h[0] + pb[1, i] * h[1] + pb[2, i] * h[2] + pb[3, i] * h[3])
         for qq in range(n_slack):
-            for i in range(n_b):
+            for i in range(n_bs):
                 x_b[i] += lam[qq] * d.dropper_interface[c, idx[qq], i]
-        for s in range(n_spans):  # x_q = D⁻¹ (e_q + F_q + M_qc (e_c - c_m x_c)), then Newmark
+        for s in range(n_s):  # x_q = D⁻¹ (e_q + F_q + M_qc (e_c - c_m x_c)), then Newmark
             t = d.span_type[s]
             off = d.modal_offset[s]
             m = d.kept[c, s]
@@ -511,16 +525,17 @@ def run_steps(d, points, st, configuration, first, stop):  # pragma: no cover - 
             for i in range(m):
                 fq[i] *= inv_d[i]
             advance(u[off:end], v[off:end], acc_s[off:end], e_s, y[off:end], fq, cf)
-        advance(u[n_q:], v[n_q:], acc_s[n_q:], e_vec[n_q:], y[n_q:], x_b, cf)
+        i_s = n_q + n_bs
+        advance(u[n_q:i_s], v[n_q:i_s], acc_s[n_q:i_s], e_vec[n_q:i_s], y[n_q:i_s], x_b[:n_bs], cf)
         mflex = d.dropper_modal_flexibility[c]
-        for q in range(n_drop):
+        for q in range(n_ds):
             bu = dl_known[q]
             for p in range(n_c):
                 bu += gm_dc[p, q] * f[p]
             b_new[q] = bu
         for qq in range(n_slack):  # symmetric: rows, as in settle_in_place
-            _axpy(mflex[idx[qq]], lam[qq], b_new, n_drop)
-        for q in range(n_drop):
+            _axpy(mflex[idx[qq]], lam[qq], b_new, n_ds)
+        for q in range(n_ds):
             bu = b_new[q]
             du = bu - st.Bu[q]
             ba = a0 * du - a2 * st.Bv[q] - a3 * st.Ba[q]
@@ -548,7 +563,7 @@ def run_steps(d, points, st, configuration, first, stop):  # pragma: no cover - 
             st.history.force[p, k] = f[p]
             st.history.head_height[p, k] = ps[p].y[head]
             st.history.wire_uplift[p, k] = upl
-        record_in_place(st.history, k, elastic, st.slack, n_slack > 0, resolved)
+        record_in_place(st.history, k, elastic, st.slack[:n_ds], n_slack > 0, resolved)
         for i in range(d.support.size):
             st.history.support_uplift[k, i] = u[n_q + d.support[i]]
     for i in range(n_c):

@@ -27,11 +27,13 @@ def run_steps(  # noqa: C901
     points: tuple[ContactPointArrays, ...],
     st: SpanModeState,
     configuration: np.ndarray,
+    stepped: np.ndarray,
     first: int,
     stop: int,
 ) -> None:
     """Steps ``first`` to ``stop - 1`` of the passage, updating ``st`` in place: the compiled loop's steps in
-    numpy. ``configuration`` (steps,) is each step's configuration."""
+    numpy. ``configuration`` (steps,) is each step's configuration, ``stepped`` (steps,) the spans it
+    advances, the first ones (the others are held, with the interface DOFs only they reach)."""
     cf = d.coefficients
     g1, g2, g3 = cf.g1, cf.g2, cf.g3
     a0, a1, a2, a3, a4, a5 = cf.a0, cf.a1, cf.a2, cf.a3, cf.a4, cf.a5
@@ -70,17 +72,20 @@ def run_steps(  # noqa: C901
                 element[i] = (rows_q, rows_c, *_element_responses(d, c, el, rows_q, rows_c))
                 current[i] = el
         kept = d.kept[c]
+        n_s = stepped[k]
+        n_bs, n_ds = d.interface_end[n_s - 1], d.dropper_start[n_s]
         # 1. Interface part of K̂⁻¹ M e.
         e_b = np.pad(e_vec[n_q:], width)
         z = np.einsum("rk,rk->r", d.interface_rhs_rows[c], sliding_window_view(e_b, 2 * width + 1))
-        for s, t, off, cpl in spans:
+        for s, t, off, cpl in spans[:n_s]:
             m = kept[s]
             z[cpl] += d.coupling[t, : cpl.size, :m] @ (d.weight[t, :m] * e_vec[off : off + m])
-        x_b = _schur_solve(d, c, z)
+        x_b = np.zeros(z.size)
+        x_b[:n_bs] = sla.cho_solve_banded((d.schur_band[c][:, :n_bs], False), z[:n_bs], check_finite=False)
         g_c = [e_vec[n_q + cpl] - c_m * x_b[cpl] for s, t, off, cpl in spans]
         # 2. Droppers' elongations of u_known.
-        dl_known = np.empty(N0.size)
-        for q in range(N0.size):
+        dl_known = np.empty(n_ds)
+        for q in range(n_ds):
             sd = d.dropper_span[q]
             s, t, off, cpl = spans[sd]
             m = kept[sd]
@@ -89,12 +94,13 @@ def run_steps(  # noqa: C901
                 + d.dropper_h[c, q, : cpl.size] @ g_c[sd]
                 + d.dropper_c[q, : cpl.size] @ x_b[cpl]
             )
-        dl_known += g1 * st.Bu + g2 * st.Bv + g3 * st.Ba
-        rate_term = beta * d.droppers.rate * (a1 * st.Bu + a4 * st.Bv + a5 * st.Ba)
+        Bu, Bv, Ba = st.Bu[:n_ds], st.Bv[:n_ds], st.Ba[:n_ds]
+        dl_known += g1 * Bu + g2 * Bv + g3 * Ba
+        rate_term = beta * d.droppers.rate[:n_ds] * (a1 * Bu + a4 * Bv + a5 * Ba)
         gap_known = np.full(n_c, -1.0)  # a point off the section stays out of contact
         c_cc = np.eye(n_c)
-        g_dc = np.zeros((n_c, N0.size))
-        gm_dc = np.zeros((n_c, N0.size))
+        g_dc = np.zeros((n_c, n_ds))
+        gm_dc = np.zeros((n_c, n_ds))
         y_known: list = [None] * n_c
         for i in on:
             point, h, el = points[i], points[i].shape[k], points[i].element[k]
@@ -114,17 +120,19 @@ def run_steps(  # noqa: C901
             for j in on:  # another span's pantograph: through the interface only
                 if j != i:
                     c_cc[i, j] = h @ forces @ element[j][2][cpl] @ points[j].shape[k]
-            g_dc[i] = g_full @ h
-            gm_dc[i] = g_modal @ h
-        G = d.dropper_flexibility[c]
+            g_dc[i] = (g_full @ h)[:n_ds]
+            gm_dc[i] = (g_modal @ h)[:n_ds]
+        G = d.dropper_flexibility[c][:n_ds, :n_ds]
+        droppers = type(d.droppers)(*(field[:n_ds] for field in d.droppers))
         # 3. Contact forces and slack droppers (the exact passage's active set).
-        step = settle(contact, st.slack.copy(), gap_known, c_cc, g_dc, dl_known, rate_term, kh, d.droppers, G)
-        contact, st.slack[:], f, idx, lam, elastic = step[:6]
+        slack = st.slack[:n_ds].copy()
+        step = settle(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, droppers, G)
+        contact, st.slack[:n_ds], f, idx, lam, elastic = step[:6]
         # 4. The response on the interface, then every span's modes with the Newmark update.
         for i in on:
-            x_b = x_b + f[i] * (element[i][2] @ points[i].shape[k])
-        x_b = x_b + lam @ d.dropper_interface[c, idx]
-        for s, t, off, cpl in spans:
+            x_b[:n_bs] += f[i] * (element[i][2] @ points[i].shape[k])[:n_bs]
+        x_b[:n_bs] += (lam @ d.dropper_interface[c, idx])[:n_bs]
+        for s, t, off, cpl in spans[:n_s]:
             m = kept[s]
             fq = e_vec[off : off + m].copy()
             for i in on:
@@ -137,13 +145,14 @@ def run_steps(  # noqa: C901
             p = slice(off, off + m)
             u_new = fq * d.inverse_diagonal[t, :m] + y[p]
             _newmark(u, v, acc_s, e_vec, y, p, u_new, cf)
-        _newmark(u, v, acc_s, e_vec, y, slice(n_q, None), x_b + y[n_q:], cf)
-        bu = dl_known + gm_dc.T @ f + d.dropper_modal_flexibility[c][:, idx] @ lam
-        du = bu - st.Bu
-        ba = a0 * du - a2 * st.Bv - a3 * st.Ba
-        st.Bv[:] = a1 * du - a4 * st.Bv - a5 * st.Ba
-        st.Ba[:] = ba
-        st.Bu[:] = bu
+        b = slice(n_q, n_q + n_bs)
+        _newmark(u, v, acc_s, e_vec, y, b, x_b[:n_bs] + y[b], cf)
+        bu = dl_known + gm_dc.T @ f + d.dropper_modal_flexibility[c][:n_ds, idx] @ lam
+        du = bu - Bu
+        ba = a0 * du - a2 * Bv - a3 * Ba
+        st.Bv[:n_ds] = a1 * du - a4 * Bv - a5 * Ba
+        st.Ba[:n_ds] = ba
+        st.Bu[:n_ds] = bu
         uplift = np.zeros(n_c)
         for i in on:
             advance_pantograph(points[i], cf, st.pantographs[i], y_known[i], f[i])
@@ -153,8 +162,10 @@ def run_steps(  # noqa: C901
             h = points[i].shape[k]
             uplift[i] = h @ (rows_q[:, :m] @ u[off : off + m] + rows_c[:, : cpl.size] @ u[n_q + cpl])
         heights = np.array([ps.y[head] for ps, head in zip(st.pantographs, heads, strict=True)])
+        forces = N0.copy()  # a dropper held ahead of the wave front keeps its static force
+        forces[:n_ds] = elastic
         record(
-            st.history, k, f, heights, uplift, u[n_q + d.support], elastic, st.slack, idx.size > 0,
+            st.history, k, f, heights, uplift, u[n_q + d.support], forces, st.slack, idx.size > 0,
             step.resolved,
         )  # fmt: skip
     for ps, touching in zip(st.pantographs, contact, strict=True):

@@ -9,11 +9,13 @@ follow the exact model's Newmark scheme, superposition and active-set rules.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from types import ModuleType
 
 import numpy as np
 
+from ...model.definition import CatenaryDefinition
 from ..contact_point import ContactPointArrays, initial_load, start_train
 from ..history import start_history, trajectory
 from ..newmark import Trajectory
@@ -22,9 +24,18 @@ from . import loop
 from .preparation import PreparedSpanModes, initial_acceleration
 from .state import start_state
 
+FRONT_MARGIN = 200.0
+"""m: a passage steps the spans that begin less than this beyond its wave front; those further ahead are at
+rest to rounding and held there (docs/performance.md, 'The spans ahead of the wave front': set by a
+convergence study: the first margin at which every case's contact force stays within 10⁻⁸ N of the passage
+that steps every span, 10³ below what another processor's rounding moves it by)."""
 
-def run(prepared: PreparedSpanModes, passage: Passage) -> Trajectory:
-    """The passage on the span-mode model (the same rules as the exact one)."""
+
+def run(
+    prepared: PreparedSpanModes, passage: Passage, front_margin: float | None = FRONT_MARGIN
+) -> Trajectory:
+    """The passage on the span-mode model (the same rules as the exact one), stepping the spans that begin
+    less than ``front_margin`` (m) beyond its wave front (None: every span, every step)."""
     backend = choose_backend(passage.backend, BACKENDS, _compiled_kernels() is not None)
     reduced = prepared.reduced
     system = reduced.system
@@ -43,6 +54,7 @@ def run(prepared: PreparedSpanModes, passage: Passage) -> Trajectory:
     state = start_state(acceleration, first.coefficients.e3, first.coefficients.g3, started, history)
     run_steps = BACKENDS[backend]()
     zero = np.zeros(configuration.size, dtype=np.int64)
+    stepped = _stepped_spans(system, started, reduced.span_type.size, front_margin)
     changes = np.r_[np.flatnonzero(np.diff(configuration)) + 1, configuration.size]  # each segment's end
     current: list = [None, None]  # the configuration whose arrays the loop has, and the arrays
 
@@ -57,12 +69,36 @@ def run(prepared: PreparedSpanModes, passage: Passage) -> Trajectory:
             if current[0] != c:
                 current[:] = c, prepared.arrays_for(configurations[c])
                 state.configuration[0] = -1  # the loop enters it: drops the modes no longer kept
-            run_steps(current[1], points, state, zero, k, end)
+            run_steps(current[1], points, state, zero, stepped, k, end)
             k = end
 
     run_in_chunks(steps, configuration.size, passage.progress)
     positions = tuple(one.position for one in started)
     return trajectory(history, started[0].time, positions, system.static.layout.support_x)
+
+
+def _stepped_spans(system, started, n_spans: int, front_margin: float | None) -> np.ndarray:  # noqa: ANN001
+    """(steps,): how many spans, the first ones, each step advances: those that begin less than
+    ``front_margin`` (m) beyond the wave front. The front leaves the foremost pantograph's starting point at
+    :func:`front_speed` (a pantograph is slower: ``check_speed``), and the model's steps carry a
+    disturbance beyond it only by a factor of ten to a hundred every 50 m. Extensible wires carry axial waves
+    some 30 times faster, which cross a study section in a third of a second: there every span is stepped
+    (docs/performance.md, 'The spans ahead of the wave front')."""
+    steps = started[0].time.size
+    catenary = system.static.layout.catenary
+    if front_margin is None or catenary.modelling.linearisation == "extensible":
+        return np.full(steps, n_spans, dtype=np.int64)
+    time = started[0].time
+    front = max(one.position[0] for one in started) + front_speed(catenary) * (time - time[0])
+    begun = np.searchsorted(system.static.layout.support_x, front + front_margin, side="left")
+    return np.clip(begun, 1, n_spans).astype(np.int64)
+
+
+def front_speed(catenary: CatenaryDefinition) -> float:
+    """The fastest transverse wave of the catenary's wires (contact, messenger and stitch wires), m/s."""
+    wires = [catenary.contact_wire, catenary.messenger_wire]
+    wires += [catenary.stitch_wire] if catenary.stitch_wire is not None else []
+    return max(math.sqrt(w.tension / w.linear_mass) for w in wires)
 
 
 def _configurations(

@@ -74,6 +74,7 @@ class SpanModeArrays(NamedTuple):
     interface_rhs_rows: np.ndarray  # (C, n_b, 2 w + 1) Y[r, r + k] at [r, w + k]
     dropper_span: np.ndarray  # (D,) in order of span
     dropper_start: np.ndarray  # (S + 1,) span s's droppers are dropper_start[s] .. dropper_start[s + 1] - 1
+    interface_end: np.ndarray  # (S,) interface DOFs 0 .. interface_end[s] - 1: reached by spans 0 .. s only
     dropper_q: np.ndarray  # (D, m) B_q D⁻¹
     type_dropper_q: np.ndarray  # (T, K, m) the same, a span type's droppers
     dropper_q_plain: np.ndarray  # (D, m) B_q
@@ -186,6 +187,7 @@ def prepare_reduced(reduced: ReducedSystem, time_step: float, near_spans: int) -
     arrays = SpanModeArrays(
         **modes,
         **droppers,
+        interface_end=interface_end(reduced),
         **as_configuration_zero(first),
         **elements,
         droppers=Droppers.for_step(system.dropper_rate, system.dropper_force, system.beta, nm.a1),
@@ -193,6 +195,14 @@ def prepare_reduced(reduced: ReducedSystem, time_step: float, near_spans: int) -
         coefficients=StepCoefficients.for_step(nm, system.alpha, system.beta, kh),
     )
     return PreparedSpanModes(reduced, nm, near_spans, arrays, builder, {(0,): first})
+
+
+def interface_end(reduced: ReducedSystem) -> np.ndarray:
+    """(S,): the interface DOFs below ``interface_end[s]`` belong to spans 0 .. s only (the interface runs in
+    track order), so that a loop stepping those spans holds the rest, the next support's DOFs included."""
+    first = np.array([c.min() if c.size else reduced.interface.size for c in reduced.coupled])
+    later = np.minimum.accumulate(first[::-1])[::-1]  # the first DOF of spans s .. S - 1
+    return np.r_[later[1:], reduced.interface.size].astype(np.int64)
 
 
 def _mode_arrays(reduced: ReducedSystem, c_k: float, c_m: float) -> dict[str, np.ndarray]:
