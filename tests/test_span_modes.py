@@ -482,8 +482,8 @@ def test_a_configuration_s_interface_responses_are_the_band_solves(system):
 
 @pytest.fixture(scope="module")
 def long_system(benchmark_catenary):
-    """Ten spans of the default model (transverse-only wires) on a coarse mesh: the front, at 460 km/h, is
-    some six spans from the section's end when the pantograph starts."""
+    """Ten spans of the default model (transverse-only wires) on a coarse mesh: as the pantograph starts,
+    the six spans more than 200 m ahead of the front (460 km/h) are held."""
     layout = build_layout(benchmark_catenary, level_design(benchmark_catenary), 10, 1.5, 3.0)
     return linearise(find_shape(layout))
 

@@ -81,7 +81,7 @@ def run_steps(  # noqa: C901
             m = kept[s]
             z[cpl] += d.coupling[t, : cpl.size, :m] @ (d.weight[t, :m] * e_vec[off : off + m])
         x_b = np.zeros(z.size)
-        x_b[:n_bs] = sla.cho_solve_banded((d.schur_band[c][:, :n_bs], False), z[:n_bs], check_finite=False)
+        x_b[:n_bs] = _schur_solve(d, c, z[:n_bs])
         g_c = [e_vec[n_q + cpl] - c_m * x_b[cpl] for s, t, off, cpl in spans]
         # 2. Droppers' elongations of u_known.
         dl_known = np.empty(n_ds)
@@ -173,7 +173,9 @@ def run_steps(  # noqa: C901
 
 
 def _schur_solve(d: SpanModeArrays, c: int, b: np.ndarray) -> np.ndarray:
-    return sla.cho_solve_banded((d.schur_band[c], False), b, check_finite=False)
+    """S⁻¹ b, or for b shorter than the interface the leading block's: the first interface DOFs' system with
+    the others held."""
+    return sla.cho_solve_banded((d.schur_band[c][:, : b.shape[0]], False), b, check_finite=False)
 
 
 def _element_rows(d: SpanModeArrays, e: int) -> tuple[np.ndarray, np.ndarray]:
