@@ -342,9 +342,9 @@ def find_shape(
     tolerance : float
         Convergence when the infinity norm of the residual is below ``tolerance`` times the
         largest wire tension, or when it stalls at round-off: a step from below 1e-6 of that tension
-        that no longer halves it. The default, 1e-8, stops at the round-off floor (some 4e-9 of the
-        tension on the presets' 20-span sections, reached in four Newton steps) without a fifth step
-        that would only confirm it (docs/performance.md, 'Speed': 3 % of an evaluation, the forces
+        that cuts it less than a hundredfold. The default, 1e-8, stops at the round-off floor (some 4e-9
+        of the tension on the presets' 20-span sections, reached in four Newton steps) without a fifth
+        step that would only confirm it (docs/performance.md, 'Speed': 3 % of an evaluation, the forces
         moved by rounding only); on longer sections, whose floor lies higher, the stall ends it.
     chord : bool
         Reuse the last factorisation in Newton's quadratic phase (above); False: a Jacobian every
@@ -368,9 +368,11 @@ def find_shape(
         norm = float(np.max(np.abs(r)))
         history.append(norm)
         # Round-off floor: in Newton's quadratic phase (below 1e-6 of the scale, where an exact step would
-        # leave some 1e-14), a step that no longer halves the residual means double precision is
-        # exhausted. The floor grows with the section: some 4e-9 of the tension at 20 spans, 1e-8 at 40.
-        stalled = len(history) > 1 and history[-2] < 1e-6 * scale and norm > 0.5 * history[-2]
+        # leave some 1e-12 and a chord step some 1e-10), a step that cuts the residual less than a
+        # hundredfold means double precision is exhausted; the next step would only confirm it (a
+        # factorisation more: docs/performance.md, 'Speed'). The floor grows with the section: some 4e-9 of
+        # the tension at 20 spans, 1.3e-8 at 40.
+        stalled = len(history) > 1 and history[-2] < 1e-6 * scale and norm > 1e-2 * history[-2]
         if norm < tolerance * scale or stalled:
             converged = True
             break

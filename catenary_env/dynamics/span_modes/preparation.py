@@ -445,15 +445,17 @@ class _ConfigurationBuilder:
         n_b = reduced.interface.size
         self.far_sum = np.zeros((n_b, n_b))
         self.far_h = np.zeros((n_drop, nc_max))
-        self.far_blocks = np.zeros(
-            (2, n_drop, n_drop)
-        )  # the droppers' G of their span's modes, with residual
+        # The droppers' G within each span (of its modes, and with the residual) as values at flat indices of
+        # the dense (D, D) G: G's other entries are the interface's alone (build adds the blocks in place)
+        q_range = [np.arange(start[s], start[s + 1]) for s in range(n_spans)]
+        self.block_index = np.concatenate([(q[:, None] * n_drop + q[None, :]).ravel() for q in q_range])
+        self.block_start = np.r_[0, np.cumsum([q.size**2 for q in q_range])]
+        self.far_blocks = np.zeros((2, self.block_index.size))
         for s, c in enumerate(reduced.coupled):
             q = slice(start[s], start[s + 1])
             self.far_sum[np.ix_(c, c)] += self.span_sum[s, far[s]]
             self.far_h[q] = self.span_h[s, far[s]]
-            self.far_blocks[0, q, q] = self.modal_block[s, far[s]]
-            self.far_blocks[1, q, q] = self.modal_block[s, far[s]] + self.residual_block[s, far[s]]
+            self.far_blocks[:, self.block_start[s] : self.block_start[s + 1]] = self._blocks(s, far[s])
         diagonals = np.arange(n_b)[:, None] + np.arange(-self.width, self.width + 1)[None, :]
         self.inside = (diagonals >= 0) & (diagonals < n_b)  # Y[r, r + k] at [r, w + k]
         self.diagonals = np.clip(diagonals, 0, n_b - 1)
@@ -497,15 +499,21 @@ class _ConfigurationBuilder:
             out["element_interface"][p, : own.size] = inverse[:, own].T
             out["dropper_element_interface"][p, : own.size] = Xt[:, own].T
         out["dropper_interface"] = Xt
-        HX = H @ np.ascontiguousarray(Xt.T)
-        # G of the far spans' blocks, then the near spans': far_blocks as they are, not copied and patched
-        out["dropper_modal_flexibility"] = self.far_blocks[0] + HX
-        out["dropper_flexibility"] = self.far_blocks[1] + HX
+        # G: the interface's part, dense, plus each span's block in place (a near span's of its near modes)
+        blocks = self.far_blocks.copy()
         for s in near:
-            q, k = slice(start[s], start[s + 1]), kept[s]
-            out["dropper_modal_flexibility"][q, q] = self.modal_block[s, k] + HX[q, q]
-            out["dropper_flexibility"][q, q] = (self.modal_block[s, k] + self.residual_block[s, k]) + HX[q, q]
+            blocks[:, self.block_start[s] : self.block_start[s + 1]] = self._blocks(s, kept[s])
+        modal = np.ascontiguousarray(H @ np.ascontiguousarray(Xt.T))
+        full = modal.copy()
+        modal.ravel()[self.block_index] += blocks[0]
+        full.ravel()[self.block_index] += blocks[1]
+        out["dropper_modal_flexibility"], out["dropper_flexibility"] = modal, full
         return out
+
+    def _blocks(self, span: int, kept: int) -> np.ndarray:
+        """(2, n²): the span's droppers' G within it, of its ``kept`` modes and with the residual, flat."""
+        modal = self.modal_block[span, kept]
+        return np.stack([modal.ravel(), (modal + self.residual_block[span, kept]).ravel()])
 
 
 def as_configuration_zero(built: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
