@@ -6,7 +6,8 @@ statistics of the "benchmark" preset at 300 km/h, Δt = 1 ms, on the study mesh,
 the same run, alternately (docs/performance.md, 'Model fidelities'). Prints the median over several
 runs of each phase, the real-time factor, the ratio of the two models, the memory peak, the time for
 several section lengths (their runs in turn, with each run's cost per span against the main section's run
-of the same round), and the exact passage's compiled (numba) and numpy backends on the same
+of the same round), full passages and as the studies run them (``evaluate``: the passage stops one span
+after the central half it analyses), and the exact passage's compiled (numba) and numpy backends on the same
 prepared system, alternately, with the largest difference of their contact forces.
 
 Scaling: a step of the exact model costs in proportion to the DOFs, so its passage grows as the
@@ -348,15 +349,9 @@ def measure_models(
             med = {key: statistics.median(r[key] for r in runs[n, model]) for key in runs[n, model][0]}
             med["min_total"] = min(r["total"] for r in runs[n, model])
             med["max_total"] = max(r["total"] for r in runs[n, model])
-            # each run's cost per span against the main section's run of the same round
             main_runs = runs.get((args.main_spans, model))
             if main_runs is not None and n != args.main_spans:
-                ratios = [
-                    (r["total"] / n) / (m["total"] / args.main_spans)
-                    for r, m in zip(runs[n, model], main_runs, strict=True)
-                ]
-                med["per_span_ratio"] = statistics.median(ratios)
-                med["per_span_ratio_range"] = (min(ratios), max(ratios))
+                med.update(per_span_ratio(runs[n, model], n, main_runs, args.main_spans))
             med["real_time_factor"] = med["total"] / med["simulated_time"]
             med["passage_per_step_us"] = 1e6 * med["passage"] / (med["steps"] - 1)
             med["cpu_passage_per_step_us"] = 1e6 * med["cpu_passage"] / (med["steps"] - 1)
@@ -375,6 +370,39 @@ def measure_models(
     return results
 
 
+def per_span_ratio(runs: list[dict], n: int, main_runs: list[dict], main_spans: int) -> dict[str, object]:
+    """Each run's cost per span at ``n`` spans against the main section's run of the same round: their
+    median and range."""
+    ratios = [(r["total"] / n) / (m["total"] / main_spans) for r, m in zip(runs, main_runs, strict=True)]
+    return {"per_span_ratio": statistics.median(ratios), "per_span_ratio_range": (min(ratios), max(ratios))}
+
+
+def study_scaling(
+    args: argparse.Namespace, study: Fidelity, spans: list[int]
+) -> dict[int, dict[str, object]]:
+    """:func:`study_evaluation` at each section length, the lengths in turn ``--runs`` times: medians, and
+    the cost per span against the main section's run by run."""
+    runs: dict[int, list[dict]] = {n: [] for n in spans}
+    for _ in range(args.runs):
+        for n in spans:
+            runs[n].append(study_evaluation(args.preset, n, args.speed, args.uplift, study))
+    scaling = {}
+    for n in spans:
+        scaling[n] = {key: statistics.median(r[key] for r in runs[n]) for key in runs[n][0]}
+        if n != args.main_spans:
+            scaling[n].update(per_span_ratio(runs[n], n, runs[args.main_spans], args.main_spans))
+    return scaling
+
+
+def print_ratio(n: int, main_spans: int, med: dict) -> None:
+    """The cost per span at ``n`` spans against the main section's, run by run (:func:`per_span_ratio`)."""
+    low, high = med["per_span_ratio_range"]
+    print(
+        f"  cost per span at {n} spans / at {main_spans}, run by run: median "
+        f"{med['per_span_ratio']:.2f} ({low:.2f}-{high:.2f})"
+    )
+
+
 def print_scaling(results: dict[str, dict[int, dict[str, float]]], main_spans: int) -> None:
     """Each model's total time per span at each section length, and against the main section's, run by run."""
     for model in MODELS:
@@ -384,11 +412,7 @@ def print_scaling(results: dict[str, dict[int, dict[str, float]]], main_spans: i
         )
         for n, med in sorted(results[model].items()):
             if "per_span_ratio" in med:
-                low, high = med["per_span_ratio_range"]
-                print(
-                    f"  cost per span at {n} spans / at {main_spans}, run by run: median "
-                    f"{med['per_span_ratio']:.2f} ({low:.2f}-{high:.2f})"
-                )
+                print_ratio(n, main_spans, med)
 
 
 def main() -> int:
@@ -492,11 +516,8 @@ def main() -> int:
     }
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
-    studies = [
-        study_evaluation(args.preset, args.main_spans, args.speed, args.uplift, study)
-        for _ in range(args.runs)
-    ]
-    study_run = {key: statistics.median(r[key] for r in studies) for key in studies[0]}
+    studies = study_scaling(args, study, spans)
+    study_run = studies[args.main_spans]
 
     def figures(med: dict[str, float]) -> dict[str, object]:
         return {
@@ -526,6 +547,14 @@ def main() -> int:
         "study_evaluation": {
             "total_median_s": study_run["total"],
             "total_cpu_median_s": study_run["cpu_total"],
+            "scaling": {
+                str(n): {
+                    "total_median_s": med["total"],
+                    "per_span_s": med["total"] / n,
+                    "per_span_over_main_section": med.get("per_span_ratio"),
+                }
+                for n, med in studies.items()
+            },
         },
         "memory_peak_traced_mib": peak,
         "process_max_rss_mib": rss,
@@ -570,6 +599,13 @@ def main() -> int:
         f"span-modes evaluation as the studies run it (evaluate: checks, and the passage stops one span "
         f"after the analysis section): {study_run['total']:.3f} s (CPU {study_run['cpu_total']:.3f} s)"
     )
+    print(
+        "scaling, span-modes as the studies run it (total per span, s): "
+        + ", ".join(f"{n}: {med['total'] / n:.3f}" for n, med in sorted(studies.items()))
+    )
+    for n, med in sorted(studies.items()):
+        if "per_span_ratio" in med:
+            print_ratio(n, args.main_spans, med)
     print(f"warm-up (imports, numba cache or compilation, 3 spans): {warm_up:.1f} s")
     print(
         f"memory: traced peak {peak['span-modes']:.0f} MiB (span-modes), {peak['exact']:.0f} MiB (exact); "
