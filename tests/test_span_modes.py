@@ -442,20 +442,21 @@ def test_mirror_signs_are_those_of_the_walk_down_the_tree(system):
 
 
 def test_a_configuration_s_interface_responses_are_the_band_solves(system):
-    """A configuration's S⁻¹ columns and dropper responses (built from S⁻¹) are the band solves of their
-    right-hand sides: the pantograph's unit forces to the last bit, the droppers' to rounding."""
+    """A configuration's S⁻¹ columns are the band solves of the pantograph's unit forces to the last bit; the
+    droppers' responses there, and the dense X and G of dropper_responses, are those of their right-hand
+    sides to rounding."""
     reduced = reduce_system(system, 300.0, 50.0)
-    builder = span_modes.prepare_reduced(reduced, DT, near_spans=1).builder
+    prepared = span_modes.prepare_reduced(reduced, DT, near_spans=1)
+    builder = prepared.builder
     for configuration in ((1,), (0, 3), (-1,)):
         out = builder.build(configuration)
         factor = (out["schur_band"], False)
-        n_drop, n_b = out["dropper_interface"].shape
+        n_drop, n_b = builder.d_c.shape[0], reduced.interface.size
         H = np.zeros((n_drop, n_b))
         rows = np.repeat(np.arange(n_drop), np.diff(builder.d_pointers))
         H[rows, builder.d_cols] = (builder.d_c - builder.c_m * out["dropper_h"])[builder.d_valid]
         X = sla.cho_solve_banded(factor, H.T)
         scale = np.abs(X).max()
-        np.testing.assert_allclose(out["dropper_interface"], X.T, rtol=0.0, atol=1e-13 * scale)
         for p, span in enumerate(configuration):
             own = reduced.coupled[span] if span >= 0 else np.zeros(0, dtype=np.int64)
             unit = np.zeros((n_b, own.size))
@@ -472,8 +473,29 @@ def test_a_configuration_s_interface_responses_are_the_band_solves(system):
             q = slice(builder.start[span], builder.start[span + 1])
             G[q, q] += builder.modal_block[span, k]
             G_full[q, q] += builder.modal_block[span, k] + builder.residual_block[span, k]
-        for name, expected in (("dropper_modal_flexibility", G), ("dropper_flexibility", G_full)):
-            np.testing.assert_allclose(out[name], expected, rtol=0.0, atol=1e-13 * np.abs(expected).max())
+        arrays = prepared.arrays._replace(**span_modes.preparation.as_configuration_zero(out))
+        responses = span_modes.preparation.dropper_responses(arrays)
+        np.testing.assert_allclose(responses[0], X.T, rtol=0.0, atol=1e-13 * scale)
+        for got, expected in zip(responses[1:], (G, G_full), strict=True):
+            np.testing.assert_allclose(got, expected, rtol=0.0, atol=1e-13 * np.abs(expected).max())
+
+
+def test_the_compiled_loop_s_dropper_rows_are_those_of_the_dense_responses(system):
+    """The compiled loop takes a slack dropper's row of X and G when it first needs it (kernels._dropper_row):
+    each row equals the dense dropper_responses' to rounding, in every configuration."""
+    kernels = pytest.importorskip("catenary_env.dynamics.span_modes.kernels")
+    reduced = reduce_system(system, 300.0, 50.0)
+    prepared = span_modes.prepare_reduced(reduced, DT, near_spans=1)
+    for configuration in ((1,), (0, 3), (-1,)):
+        arrays = prepared.arrays_for(configuration)
+        X, G, G_full = span_modes.preparation.dropper_responses(arrays)
+        n_drop, n_b = X.shape
+        x, modal, full = np.zeros(n_b), np.zeros(n_drop), np.zeros(n_drop)
+        for q in range(n_drop):
+            kernels._dropper_row(arrays, 0, q, np.zeros(n_b), x, modal, full)
+            np.testing.assert_allclose(x, X[q], rtol=0.0, atol=1e-13 * np.abs(X).max())
+            np.testing.assert_allclose(modal, G[q], rtol=0.0, atol=1e-13 * np.abs(G).max())
+            np.testing.assert_allclose(full, G_full[q], rtol=0.0, atol=1e-13 * np.abs(G_full).max())
 
 
 # The spans ahead of the wave front (docs/performance.md, 'The spans ahead of the wave front'): held at rest,

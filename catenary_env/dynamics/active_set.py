@@ -248,12 +248,19 @@ def _step_system(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh,
 
 
 @compilable()
-def settle_in_place(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, droppers, G, work):  # noqa: ANN001, ANN201, C901
+def settle_in_place(  # noqa: C901
+    contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, droppers, G, work, ready, first
+):  # noqa: ANN001, ANN201
     """:func:`settle` in scalar loops, for the compiled loops; ``work`` from :func:`settle_workspace`.
 
-    Returns (m, resolved); ``contact`` and ``slack`` are updated in place, and ``work`` holds λ and the
-    slack droppers' indices in ``lam[:m]``, ``idx[:m]``, the droppers' forces in ``elastic`` and the contact
-    forces in ``f``.
+    Returns (m, resolved, pending); ``contact`` and ``slack`` are updated in place, and ``work`` holds λ and
+    the slack droppers' indices in ``lam[:m]``, ``idx[:m]``, the droppers' forces in ``elastic`` and the
+    contact forces in ``f``. It reads G's rows of the slack droppers only. ``ready`` marks the rows G
+    holds, for a caller that fills them as droppers go slack: the slack droppers' rows are to be ready as
+    it starts (iteration ``first``, 0 for a new step). When an iteration makes a dropper slack whose row is
+    not, it stops with that iteration's states in ``contact`` and ``slack`` and returns ``pending``, the
+    next iteration's number: the caller fills the rows of the slack droppers and calls again with ``first =
+    pending``, which goes on as if it had not stopped. ``pending`` is -1 once it is done.
     """
     lam, idx, elastic, new_slack, f, new_contact, gap = (
         work[2],
@@ -268,7 +275,7 @@ def settle_in_place(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, 
     n_drop = slack.size
     n_c = gap_known.size
     m = 0
-    for iteration in range(MAX_ACTIVE_SET_ITERATIONS):
+    for iteration in range(first, MAX_ACTIVE_SET_ITERATIONS):
         m = _step_system(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, kh, droppers, G, work)
         changed = False
         for p in range(n_c):
@@ -296,12 +303,14 @@ def settle_in_place(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, 
             new_slack[q] = elastic[q] < 0.0
             changed = changed or new_slack[q] != slack[q]
         if not changed:
-            return m, True
+            return m, True, -1
+        missing = False  # a dropper gone slack whose row of G is not ready
         if iteration < FULL_SWITCH_ITERATIONS:  # as switch_states
             for p in range(n_c):
                 contact[p] = new_contact[p]
             for q in range(n_drop):
                 slack[q] = new_slack[q]
+                missing = missing or (slack[q] and not ready[q])
         else:
             worst = -1
             violation = 0.0
@@ -320,4 +329,7 @@ def settle_in_place(contact, slack, gap_known, c_cc, g_dc, dl_known, rate_term, 
                     contact[worst_point] = new_contact[worst_point]
             else:
                 slack[worst] = not slack[worst]
-    return m, False
+                missing = slack[worst] and not ready[worst]
+        if missing and iteration + 1 < MAX_ACTIVE_SET_ITERATIONS:
+            return m, False, iteration + 1
+    return m, False, -1

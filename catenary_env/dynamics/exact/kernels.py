@@ -302,6 +302,7 @@ def run_steps(d, points, s, first, stop, width):  # pragma: no cover - compiled 
     rate_term = np.zeros(n_drop)
     work = settle_workspace(n_c, n_drop)
     lam, idx, elastic, f = work[2], work[3], work[4], work[6]
+    every_row = np.ones(n_drop, dtype=np.bool_)  # the whole G is prepared
     y_known = np.zeros((n_c, p_max))
     rhs_p = np.zeros(p_max)
     contact = np.zeros(n_c, dtype=np.bool_)
@@ -324,7 +325,7 @@ def run_steps(d, points, s, first, stop, width):  # pragma: no cover - compiled 
                 h = points[i].shape[k]
                 zd = d.z_dofs[points[i].element[k]]
                 gap_known[i] = _gap_known(d, points[i], ps[i], k, h, zd, b, y, rhs_p, y_known[i])
-        m, resolved = settle_in_place(
+        m, resolved, _ = settle_in_place(
             contact,
             s.slack,
             gap_known,
@@ -336,6 +337,8 @@ def run_steps(d, points, s, first, stop, width):  # pragma: no cover - compiled 
             d.droppers,
             d.dropper_flexibility,
             work,
+            every_row,
+            0,
         )
         # u₁ = u_known + Σ u*_c f + Σ W_d λ_d (with u_known = b + y), over the rows where these
         # responses are not negligible.

@@ -9,8 +9,9 @@ Each step:
 2. The droppers' elongations and the contact point's displacement from x_b and e, without the
    modes' full solution: B x = (B_q D⁻¹) e_q + (B_q D⁻¹ M_qc)(e_c - c_m x_c) + B_c x_c.
 3. The contact force and the slack droppers (:func:`~catenary_env.dynamics.active_set.settle_in_place`).
-4. Their response on the interface, Δx_b = S⁻¹ (F_b - c_m Σ M_cq D⁻¹ F_q), precomputed per
-   contact-wire element and per dropper; then every span's modes in one pass,
+4. Their response on the interface, Δx_b = S⁻¹ (F_b - c_m Σ M_cq D⁻¹ F_q), computed per contact-wire
+   element as the pantograph enters it and per dropper as it first goes slack in a configuration
+   (:func:`_dropper_row`, with the dropper's row of G that step 3 reads); then every span's modes in one pass,
    x_q = D⁻¹ (e_q + F_q + M_qc (e_c - c_m x_c)), fused with the Newmark update.
 
 S and Y depend on the configuration (the spans the pantographs are in); S is a banded Cholesky factor.
@@ -172,6 +173,31 @@ def _configure(d, st, c):  # pragma: no cover - compiled
     _dropper_elongations(d, c, st.v, st.Bv)
     _dropper_elongations(d, c, st.a, st.Ba)
     st.configuration[0] = c
+
+
+@njit(cache=True, fastmath=FAST)
+def _dropper_row(d, c, q, rhs, x, modal, full):  # pragma: no cover - compiled
+    """Dropper q's row of :func:`.preparation.dropper_responses` in configuration c: the interface's motion
+    x = S⁻¹ (B_c - c_m H)_qᵀ under a unit force at q, and the droppers' elongations under it, of the kept
+    modes and with the residual (G's row q: G is symmetric). ``rhs``: work space (n_b,)."""
+    s = d.dropper_span[q]
+    rhs[:] = 0.0
+    for j in range(d.n_coupled[d.span_type[s]]):
+        rhs[d.coupled[s, j]] = d.dropper_interface_force[c, q, j]
+    _band_solve((d.schur_columns[c], d.schur_rows[c], d.schur_inverse_diagonal[c]), rhs, x)
+    for r in range(modal.size):
+        sr = d.dropper_span[r]
+        acc = 0.0
+        for j in range(d.n_coupled[d.span_type[sr]]):
+            acc += d.dropper_interface_force[c, r, j] * x[d.coupled[sr, j]]
+        modal[r] = acc
+        full[r] = acc
+    first = d.dropper_start[s]
+    n = d.dropper_start[s + 1] - first
+    block = d.block_start[s] + (q - first) * n
+    for j in range(n):
+        modal[first + j] += d.dropper_blocks[c, 0, block + j]
+        full[first + j] += d.dropper_blocks[c, 1, block + j]
 
 
 @inlined
@@ -384,6 +410,14 @@ def run_steps(d, points, st, configuration, stepped, first, stop):  # pragma: no
     rate_term = np.zeros(n_drop)
     work = settle_workspace(n_c, n_drop)
     lam, idx, elastic, f = work[2], work[3], work[4], work[6]
+    # The slack droppers' rows of dropper_responses, each filled when its dropper first goes slack in the
+    # configuration (_dropper_row): X, G of the kept modes and G with the residual.
+    x_rows = np.empty((n_drop, n_b))
+    g_modal_rows = np.empty((n_drop, n_drop))
+    g_rows = np.empty((n_drop, n_drop))
+    ready = np.zeros(n_drop, dtype=np.bool_)
+    row_rhs = np.zeros(n_b)
+    rows_of = -1  # the configuration they are of
     y_known = np.zeros((n_c, p_max))
     rhs_p = np.zeros(p_max)
     fq = np.zeros(m_max)  # a span's modes' right-hand side
@@ -400,6 +434,13 @@ def run_steps(d, points, st, configuration, stepped, first, stop):  # pragma: no
             paired = -1
             for i in range(n_c):
                 current[i] = -1
+        if c != rows_of:
+            ready[:] = False
+            for q in range(n_drop):  # slack as the loop enters the configuration
+                if st.slack[q]:
+                    _dropper_row(d, c, q, row_rhs, x_rows[q], g_modal_rows[q], g_rows[q])
+                    ready[q] = True
+            rows_of = c
         n_s = stepped[k]
         if n_s != paired:
             _span_pairs(d, c, partner, n_s)
@@ -414,7 +455,6 @@ def run_steps(d, points, st, configuration, stepped, first, stop):  # pragma: no
                     d, c, i, el, rows_c[i], p_b[i], comp[i], g_modal[i], g_full[i], m_qc[i], forces[i]
                 )
                 current[i] = el
-        flex = d.dropper_flexibility[c]
         # 1. Interface part of K̂⁻¹ M e, and the droppers' modal part of step 2, span by span.
         band = d.interface_rhs_rows[c]
         e_pad[width : width + n_b] = e_vec[n_q:]
@@ -477,20 +517,28 @@ def run_steps(d, points, st, configuration, stepped, first, stop):  # pragma: no
             )  # fmt: skip
         if n_c > 1:
             _cross_compliance(d, points, k, forces, p_b, c_cc)
-        # 3. Contact forces and slack droppers.
-        n_slack, resolved = settle_in_place(
-            contact,
-            st.slack[:n_ds],
-            gap_known,
-            c_cc,
-            g_dc[:, :n_ds],
-            dl_known[:n_ds],
-            rate_term[:n_ds],
-            kh,
-            d.droppers,
-            flex,
-            work,
-        )
+        # 3. Contact forces and slack droppers, with the rows of the droppers gone slack filled as they go.
+        iteration = 0
+        while iteration >= 0:
+            n_slack, resolved, iteration = settle_in_place(
+                contact,
+                st.slack[:n_ds],
+                gap_known,
+                c_cc,
+                g_dc[:, :n_ds],
+                dl_known[:n_ds],
+                rate_term[:n_ds],
+                kh,
+                d.droppers,
+                g_rows,
+                work,
+                ready,
+                iteration,
+            )
+            for q in range(n_ds if iteration >= 0 else 0):
+                if st.slack[q] and not ready[q]:
+                    _dropper_row(d, c, q, row_rhs, x_rows[q], g_modal_rows[q], g_rows[q])
+                    ready[q] = True
         # 4. Their interface response, then every span's modes with the Newmark update.
         for p in range(n_c):
             if points[p].element[k] < 0:
@@ -501,7 +549,7 @@ def run_steps(d, points, st, configuration, stepped, first, stop):  # pragma: no
                 x_b[i] += f[p] * (pb[0, i] * h[0] + pb[1, i] * h[1] + pb[2, i] * h[2] + pb[3, i] * h[3])
         for qq in range(n_slack):
             for i in range(n_bs):
-                x_b[i] += lam[qq] * d.dropper_interface[c, idx[qq], i]
+                x_b[i] += lam[qq] * x_rows[idx[qq], i]
         for s in range(n_s):  # x_q = D⁻¹ (e_q + F_q + M_qc (e_c - c_m x_c)), then Newmark
             t = d.span_type[s]
             off = d.modal_offset[s]
@@ -527,14 +575,13 @@ def run_steps(d, points, st, configuration, stepped, first, stop):  # pragma: no
             advance(u[off:end], v[off:end], acc_s[off:end], e_s, y[off:end], fq, cf)
         i_s = n_q + n_bs
         advance(u[n_q:i_s], v[n_q:i_s], acc_s[n_q:i_s], e_vec[n_q:i_s], y[n_q:i_s], x_b[:n_bs], cf)
-        mflex = d.dropper_modal_flexibility[c]
         for q in range(n_ds):
             bu = dl_known[q]
             for p in range(n_c):
                 bu += gm_dc[p, q] * f[p]
             b_new[q] = bu
         for qq in range(n_slack):  # symmetric: rows, as in settle_in_place
-            _axpy(mflex[idx[qq]], lam[qq], b_new, n_ds)
+            _axpy(g_modal_rows[idx[qq]], lam[qq], b_new, n_ds)
         for q in range(n_ds):
             bu = b_new[q]
             du = bu - st.Bu[q]

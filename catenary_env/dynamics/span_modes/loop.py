@@ -18,7 +18,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 from ..active_set import settle
 from ..contact_point import ContactPointArrays, advance_pantograph, known_response
 from ..history import record
-from .preparation import SpanModeArrays
+from .preparation import SpanModeArrays, dropper_responses
 from .state import SpanModeState
 
 
@@ -52,8 +52,12 @@ def run_steps(  # noqa: C901
         (s, d.span_type[s], d.modal_offset[s], d.coupled[s, : d.n_coupled[d.span_type[s]]])
         for s in range(n_spans)
     ]
+    responses_of = -1  # the configuration whose droppers' responses X, G (of the kept modes) and G_full
     for k in range(first, stop):
         c = configuration[k]
+        if c != responses_of:
+            X, G_modal, G_full = dropper_responses(d, c)
+            responses_of = c
         if c != st.configuration[0]:
             for s, _, off, _ in spans:
                 drop = slice(off + d.kept[c, s], d.modal_offset[s + 1])
@@ -122,7 +126,7 @@ def run_steps(  # noqa: C901
                     c_cc[i, j] = h @ forces @ element[j][2][cpl] @ points[j].shape[k]
             g_dc[i] = (g_full @ h)[:n_ds]
             gm_dc[i] = (g_modal @ h)[:n_ds]
-        G = d.dropper_flexibility[c][:n_ds, :n_ds]
+        G = G_full[:n_ds, :n_ds]
         droppers = type(d.droppers)(*(field[:n_ds] for field in d.droppers))
         # 3. Contact forces and slack droppers (the exact passage's active set).
         slack = st.slack[:n_ds].copy()
@@ -131,7 +135,7 @@ def run_steps(  # noqa: C901
         # 4. The response on the interface, then every span's modes with the Newmark update.
         for i in on:
             x_b[:n_bs] += f[i] * (element[i][2] @ points[i].shape[k])[:n_bs]
-        x_b[:n_bs] += (lam @ d.dropper_interface[c, idx])[:n_bs]
+        x_b[:n_bs] += (lam @ X[idx])[:n_bs]
         for s, t, off, cpl in spans[:n_s]:
             m = kept[s]
             fq = e_vec[off : off + m].copy()
@@ -147,7 +151,7 @@ def run_steps(  # noqa: C901
             _newmark(u, v, acc_s, e_vec, y, p, u_new, cf)
         b = slice(n_q, n_q + n_bs)
         _newmark(u, v, acc_s, e_vec, y, b, x_b[:n_bs] + y[b], cf)
-        bu = dl_known + gm_dc.T @ f + d.dropper_modal_flexibility[c][:n_ds, idx] @ lam
+        bu = dl_known + gm_dc.T @ f + G_modal[:n_ds, idx] @ lam
         du = bu - Bu
         ba = a0 * du - a2 * Bv - a3 * Ba
         st.Bv[:n_ds] = a1 * du - a4 * Bv - a5 * Ba

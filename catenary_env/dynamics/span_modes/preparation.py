@@ -80,9 +80,10 @@ class SpanModeArrays(NamedTuple):
     dropper_q_plain: np.ndarray  # (D, m) B_q
     dropper_c: np.ndarray  # (D, n_c) B_c
     dropper_h: np.ndarray  # (C, D, n_c) B_q D⁻¹ M_qc over the kept modes
-    dropper_interface: np.ndarray  # (C, D, n_b) x_b of a unit dropper force
-    dropper_flexibility: np.ndarray  # (C, D, D) G with the residual
-    dropper_modal_flexibility: np.ndarray  # (C, D, D) G of the kept modes
+    dropper_interface_force: np.ndarray  # (C, D, n_c) B_c - c_m H: a unit dropper force on the interface
+    dropper_blocks: np.ndarray  # (C, 2, Σ K_s²) each span's droppers' G within it, of the kept modes and
+    # with the residual: span s's (K_s, K_s) block row by row from block_start[s] (dropper_responses)
+    block_start: np.ndarray  # (S + 1,)
     element_span: np.ndarray  # (E,)
     element_local: np.ndarray  # (E, 4) internal index, or -1 - position in the span's coupled list
     element_compliance: np.ndarray  # (E, 4, 4) residual
@@ -127,9 +128,8 @@ class PreparedSpanModes:
         early, as ``evaluate``'s does, never builds those of the spans it does not reach.
     built : dict
         The configurations built so far, kept for the next passage (another speed) while they take at most
-        :data:`KEPT_CONFIGURATION_BYTES` together: a configuration's droppers' flexibility is a dense matrix
-        over every dropper of the section, some 0.5 MB at 20 spans and 8 MB at 80, so that a long section's
-        would otherwise grow with the cube of its length.
+        :data:`KEPT_CONFIGURATION_BYTES` together (some 0.1 MB a configuration at 20 spans, growing with the
+        section's length, and with it their number).
     """
 
     reduced: ReducedSystem
@@ -188,6 +188,7 @@ def prepare_reduced(reduced: ReducedSystem, time_step: float, near_spans: int) -
         **modes,
         **droppers,
         interface_end=interface_end(reduced),
+        block_start=builder.block_start,
         **as_configuration_zero(first),
         **elements,
         droppers=Droppers.for_step(system.dropper_rate, system.dropper_force, system.beta, nm.a1),
@@ -380,9 +381,8 @@ CONFIGURATION_FIELDS = (
     "schur_inverse_diagonal",
     "interface_rhs_rows",
     "dropper_h",
-    "dropper_interface",
-    "dropper_flexibility",
-    "dropper_modal_flexibility",
+    "dropper_interface_force",
+    "dropper_blocks",
     "element_interface",
     "dropper_element_interface",
 )
@@ -445,12 +445,10 @@ class _ConfigurationBuilder:
         n_b = reduced.interface.size
         self.far_sum = np.zeros((n_b, n_b))
         self.far_h = np.zeros((n_drop, nc_max))
-        # The droppers' G within each span (of its modes, and with the residual) as values at flat indices of
-        # the dense (D, D) G: G's other entries are the interface's alone (build adds the blocks in place)
-        q_range = [np.arange(start[s], start[s + 1]) for s in range(n_spans)]
-        self.block_index = np.concatenate([(q[:, None] * n_drop + q[None, :]).ravel() for q in q_range])
-        self.block_start = np.r_[0, np.cumsum([q.size**2 for q in q_range])]
-        self.far_blocks = np.zeros((2, self.block_index.size))
+        # The droppers' G within each span (of its modes, and with the residual), its (K_s, K_s) block row by
+        # row from block_start[s]: G's other entries are the interface's alone (dropper_responses)
+        self.block_start = np.r_[0, np.cumsum(np.diff(start) ** 2)].astype(np.int64)
+        self.far_blocks = np.zeros((2, self.block_start[-1]))
         for s, c in enumerate(reduced.coupled):
             q = slice(start[s], start[s + 1])
             self.far_sum[np.ix_(c, c)] += self.span_sum[s, far[s]]
@@ -462,12 +460,18 @@ class _ConfigurationBuilder:
 
     def build(self, configuration: tuple[int, ...]) -> dict[str, np.ndarray]:
         """One configuration's arrays (:data:`CONFIGURATION_FIELDS` and ``kept``): S's banded factor, Y,
-        H = B_q D⁻¹ M_qc, the droppers' interface responses and their flexibility G (of the kept modes, and
-        with the residual); and for each pantograph's span, S⁻¹ at its coupled interface DOFs and the
-        droppers' elongations there (B_c - c_m H) S⁻¹."""
+        H = B_q D⁻¹ M_qc, a unit dropper force's right-hand side on the interface, B_c - c_m H, and each
+        span's droppers' flexibility block (of the kept modes, and with the residual); and for each
+        pantograph's span, S⁻¹ at its coupled interface DOFs and the droppers' elongations there,
+        (B_c - c_m H) S⁻¹.
+
+        The droppers' interface responses S⁻¹ (B_c - c_m H)ᵀ and their flexibility G over the whole section
+        are not built: dense, (D, n_b) and (D, D), their cost grew with the square of the section's length
+        and a passage's configurations with its length. A loop takes a slack dropper's row of them when it
+        first needs it (:func:`dropper_responses`; docs/performance.md, 'A slack dropper's responses when
+        it first goes slack')."""
         reduced, c_k, c_m, width, start = self.reduced, self.c_k, self.c_m, self.width, self.start
         n_b = reduced.interface.size
-        n_drop, nc_max = self.d_c.shape
         kept = kept_modes(reduced, self.near_spans, configuration)
         sum_coupling = self.far_sum.copy()
         dropper_h = self.far_h.copy()
@@ -484,31 +488,32 @@ class _ConfigurationBuilder:
         out["interface_rhs_rows"] = np.where(self.inside, Y[np.arange(n_b)[:, None], self.diagonals], 0.0)
         # B_c - c_m H on the interface: a unit dropper force's right-hand side, ≤ n_c entries a row (sparse:
         # its products below then cost n_c, not n_b, multiply-adds an entry of theirs)
-        H = sp.csr_matrix(
-            ((self.d_c - c_m * dropper_h)[self.d_valid], self.d_cols, self.d_pointers), (n_drop, n_b)
-        )
-        # S⁻¹: a band solve of each unit force (each column a solve of its own, so the pantographs' columns
-        # are those of their unit forces), fewer than the droppers' right-hand sides; then X = S⁻¹ Hᵀ, stored
-        # as its transpose H S⁻ᵀ, the droppers' interface responses.
-        inverse = sla.cho_solve_banded((factor, False), np.eye(n_b), check_finite=False)
-        Xt = H @ np.ascontiguousarray(inverse.T)
+        out["dropper_interface_force"] = self.d_c - c_m * dropper_h
+        H = self._interface_forces(out["dropper_interface_force"])
+        # Each pantograph's span: S⁻¹ at its coupled interface DOFs (a band solve of each unit force) and
+        # the droppers' elongations under them
         owns = [reduced.coupled[s] if s >= 0 else np.zeros(0, dtype=np.int64) for s in configuration]
+        nc_max = self.d_c.shape[1]
         out["element_interface"] = np.zeros((len(owns), nc_max, n_b))
-        out["dropper_element_interface"] = np.zeros((len(owns), nc_max, n_drop))
-        for p, own in enumerate(owns):  # each pantograph's span: unit forces at its coupled interface DOFs
-            out["element_interface"][p, : own.size] = inverse[:, own].T
-            out["dropper_element_interface"][p, : own.size] = Xt[:, own].T
-        out["dropper_interface"] = Xt
-        # G: the interface's part, dense, plus each span's block in place (a near span's of its near modes)
+        out["dropper_element_interface"] = np.zeros((len(owns), nc_max, H.shape[0]))
+        for p, own in enumerate(owns):
+            unit = np.zeros((n_b, own.size))
+            unit[own, np.arange(own.size)] = 1.0
+            columns = sla.cho_solve_banded((factor, False), unit, check_finite=False)
+            out["element_interface"][p, : own.size] = columns.T
+            out["dropper_element_interface"][p, : own.size] = (H @ columns).T
+        # Each span's droppers' blocks of G (a near span's of its near modes)
         blocks = self.far_blocks.copy()
         for s in near:
             blocks[:, self.block_start[s] : self.block_start[s + 1]] = self._blocks(s, kept[s])
-        modal = np.ascontiguousarray(H @ np.ascontiguousarray(Xt.T))
-        full = modal.copy()
-        modal.ravel()[self.block_index] += blocks[0]
-        full.ravel()[self.block_index] += blocks[1]
-        out["dropper_modal_flexibility"], out["dropper_flexibility"] = modal, full
+        out["dropper_blocks"] = blocks
         return out
+
+    def _interface_forces(self, dropper_interface_force: np.ndarray) -> sp.csr_matrix:
+        """B_c - c_m H, sparse (D, n_b): each dropper's row on its span's coupled interface DOFs."""
+        n_drop = self.d_c.shape[0]
+        values = dropper_interface_force[self.d_valid]
+        return sp.csr_matrix((values, self.d_cols, self.d_pointers), (n_drop, self.reduced.interface.size))
 
     def _blocks(self, span: int, kept: int) -> np.ndarray:
         """(2, n²): the span's droppers' G within it, of its ``kept`` modes and with the residual, flat."""
@@ -520,6 +525,29 @@ def as_configuration_zero(built: dict[str, np.ndarray]) -> dict[str, np.ndarray]
     """A configuration's arrays (:meth:`_ConfigurationBuilder.build`) as the loops read them, configuration
     0 of one (views, not copies)."""
     return {name: built[name][None] for name in ("kept", *CONFIGURATION_FIELDS)}
+
+
+def dropper_responses(d: SpanModeArrays, c: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The droppers' responses in configuration c, dense over the section: X = (B_c - c_m H) S⁻¹ (D, n_b),
+    the interface's motion under a unit force at each dropper, and its flexibility G = (B_c - c_m H) S⁻¹
+    (B_c - c_m H)ᵀ plus each span's own block, of the kept modes and with the residual (D, D): a dropper's
+    elongations under a unit force at each. The numpy loop takes them whole as it enters a configuration;
+    the compiled loop a slack dropper's row when it first needs it (its ``_dropper_row``, the same sums)."""
+    n_drop, n_b = d.dropper_span.size, d.schur_inverse_diagonal.shape[1]
+    forces = np.zeros((n_drop, n_b))
+    for q, s in enumerate(d.dropper_span):
+        nc = d.n_coupled[d.span_type[s]]
+        forces[q, d.coupled[s, :nc]] = d.dropper_interface_force[c, q, :nc]
+    X = sla.cho_solve_banded((d.schur_band[c], False), forces.T, check_finite=False)
+    modal = forces @ X
+    full = modal.copy()
+    for s in range(d.span_type.size):
+        q = slice(d.dropper_start[s], d.dropper_start[s + 1])
+        n = q.stop - q.start
+        block = d.dropper_blocks[c, :, d.block_start[s] : d.block_start[s + 1]].reshape(2, n, n)
+        modal[q, q] += block[0]
+        full[q, q] += block[1]
+    return X.T, modal, full
 
 
 def _element_arrays(
