@@ -200,6 +200,16 @@ def _dropper_row(d, c, q, rhs, x, modal, full):  # pragma: no cover - compiled
         full[first + j] += d.dropper_blocks[c, 1, block + j]
 
 
+@njit(cache=True, fastmath=FAST)
+def _fill_rows(d, c, slack, count, ready, rhs, x_rows, g_modal_rows, g_rows):  # pragma: no cover - compiled
+    """The rows (:func:`_dropper_row`) of the slack droppers among the first ``count`` whose rows are not
+    ready."""
+    for q in range(count):
+        if slack[q] and not ready[q]:
+            _dropper_row(d, c, q, rhs, x_rows[q], g_modal_rows[q], g_rows[q])
+            ready[q] = True
+
+
 @inlined
 def _rows_dot(rows, first, count, x, m, out):  # pragma: no cover - compiled
     """out[k] = rows[first + k, :m] · x[:m] for k < count, four rows per pass over x."""
@@ -434,12 +444,9 @@ def run_steps(d, points, st, configuration, stepped, first, stop):  # pragma: no
             paired = -1
             for i in range(n_c):
                 current[i] = -1
-        if c != rows_of:
+        if c != rows_of:  # the droppers slack as the loop enters the configuration
             ready[:] = False
-            for q in range(n_drop):  # slack as the loop enters the configuration
-                if st.slack[q]:
-                    _dropper_row(d, c, q, row_rhs, x_rows[q], g_modal_rows[q], g_rows[q])
-                    ready[q] = True
+            _fill_rows(d, c, st.slack, n_drop, ready, row_rhs, x_rows, g_modal_rows, g_rows)
             rows_of = c
         n_s = stepped[k]
         if n_s != paired:
@@ -535,10 +542,8 @@ def run_steps(d, points, st, configuration, stepped, first, stop):  # pragma: no
                 ready,
                 iteration,
             )
-            for q in range(n_ds if iteration >= 0 else 0):
-                if st.slack[q] and not ready[q]:
-                    _dropper_row(d, c, q, row_rhs, x_rows[q], g_modal_rows[q], g_rows[q])
-                    ready[q] = True
+            if iteration >= 0 or not resolved:  # gone slack (an unresolved step's: for the next step)
+                _fill_rows(d, c, st.slack, n_ds, ready, row_rhs, x_rows, g_modal_rows, g_rows)
         # 4. Their interface response, then every span's modes with the Newmark update.
         for p in range(n_c):
             if points[p].element[k] < 0:
