@@ -488,8 +488,8 @@ class _ConfigurationBuilder:
         out["interface_rhs_rows"] = np.where(self.inside, Y[np.arange(n_b)[:, None], self.diagonals], 0.0)
         # B_c - c_m H on the interface: a unit dropper force's right-hand side, ≤ n_c entries a row (sparse:
         # its products below then cost n_c, not n_b, multiply-adds an entry of theirs)
-        out["dropper_interface_force"] = self.d_c - c_m * dropper_h
-        H = self._interface_forces(out["dropper_interface_force"])
+        out["dropper_interface_force"] = forces = self.d_c - c_m * dropper_h
+        H = sp.csr_matrix((forces[self.d_valid], self.d_cols, self.d_pointers), (forces.shape[0], n_b))
         # Each pantograph's span: S⁻¹ at its coupled interface DOFs (a band solve of each unit force) and
         # the droppers' elongations under them
         owns = [reduced.coupled[s] if s >= 0 else np.zeros(0, dtype=np.int64) for s in configuration]
@@ -508,12 +508,6 @@ class _ConfigurationBuilder:
             blocks[:, self.block_start[s] : self.block_start[s + 1]] = self._blocks(s, kept[s])
         out["dropper_blocks"] = blocks
         return out
-
-    def _interface_forces(self, dropper_interface_force: np.ndarray) -> sp.csr_matrix:
-        """B_c - c_m H, sparse (D, n_b): each dropper's row on its span's coupled interface DOFs."""
-        n_drop = self.d_c.shape[0]
-        values = dropper_interface_force[self.d_valid]
-        return sp.csr_matrix((values, self.d_cols, self.d_pointers), (n_drop, self.reduced.interface.size))
 
     def _blocks(self, span: int, kept: int) -> np.ndarray:
         """(2, n²): the span's droppers' G within it, of its ``kept`` modes and with the residual, flat."""
