@@ -266,17 +266,18 @@ def _dropper_arrays(reduced: ReducedSystem, inv_d: np.ndarray) -> dict[str, np.n
     for s, dofs in enumerate(reduced.internal):
         q = np.arange(start[s], start[s + 1])
         B_span.append(submatrix(B, q, np.r_[dofs, reduced.interface[reduced.coupled[s]]]))
-        if not np.allclose(np.abs(B_span[s].toarray()).sum(axis=1), row_size[q], rtol=1e-12, atol=0.0):
+        inside = np.bincount(B_span[s].row, np.abs(B_span[s].data), minlength=q.size)
+        if not np.allclose(inside, row_size[q], rtol=1e-12, atol=0.0):
             raise AssertionError("a dropper's row reaches outside its span")  # a bug, never a user error
     n_types, m_max = inv_d.shape
     type_q = np.zeros((n_types, int(np.diff(start).max(initial=0)), m_max))
     type_c = np.zeros((n_types, type_q.shape[1], max(c.size for c in reduced.coupled)))
     for t, r in enumerate(reduced.representative):
+        # B T with T = [[Φ, Ψ], [0, I]]: B_i Φ on the modes, B_i Ψ + B_c on the coupled interface DOFs
         modes, n_c = reduced.types[t], reduced.coupled[r].size
-        basis = np.block([[modes.shapes, modes.constraint], [np.zeros((n_c, modes.n_modes)), np.eye(n_c)]])
-        rows = B_span[r].toarray() @ basis
-        type_q[t, : rows.shape[0], : modes.n_modes] = rows[:, : modes.n_modes]
-        type_c[t, : rows.shape[0], :n_c] = rows[:, modes.n_modes :]
+        B_i, B_c = np.hsplit(B_span[r].toarray(), [modes.shapes.shape[0]])
+        type_q[t, : B_i.shape[0], : modes.n_modes] = B_i @ modes.shapes
+        type_c[t, : B_i.shape[0], :n_c] = B_i @ modes.constraint + B_c
     for s, t in enumerate(reduced.span_type):
         if not B_span[s].same(B_span[reduced.representative[t]]):
             raise AssertionError("a span's droppers differ from its type's")  # a bug, never a user error
