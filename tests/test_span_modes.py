@@ -452,9 +452,10 @@ def test_a_configuration_s_interface_responses_are_the_band_solves(system):
         out = builder.build(configuration)
         factor = (out["schur_band"], False)
         n_drop, n_b = builder.d_c.shape[0], reduced.interface.size
-        H = np.zeros((n_drop, n_b))
-        rows = np.repeat(np.arange(n_drop), np.diff(builder.d_pointers))
-        H[rows, builder.d_cols] = (builder.d_c - builder.c_m * out["dropper_h"])[builder.d_valid]
+        H = np.zeros((n_drop, n_b))  # each dropper's row on its span's coupled interface DOFs
+        for q, span in enumerate(builder.d_span):
+            own = reduced.coupled[span]
+            H[q, own] = (builder.d_c - builder.c_m * out["dropper_h"])[q, : own.size]
         X = sla.cho_solve_banded(factor, H.T)
         scale = np.abs(X).max()
         for p, span in enumerate(configuration):

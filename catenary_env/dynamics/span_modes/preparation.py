@@ -411,7 +411,12 @@ class _ConfigurationBuilder:
         d_span, d_q, d_qd, d_c = (
             droppers[k] for k in ("dropper_span", "dropper_q_plain", "dropper_q", "dropper_c")
         )
-        self.d_c = d_c
+        self.d_c, self.d_span, self.n_coupled, self.coupled = (
+            d_c,
+            d_span,
+            modes["n_coupled"],
+            modes["coupled"],
+        )
         n_drop, nc_max = d_c.shape
         inv_d, coupling = modes["inverse_diagonal"], modes["coupling"]
         self.width = max(
@@ -437,10 +442,6 @@ class _ConfigurationBuilder:
                     )
                 self.span_sum[s, k], self.span_h[s, k], self.modal_block[s, k] = of_type[t, k]
                 self.residual_block[s, k] = residual.dropper_block(reduced, s, near=k == types[t].n_modes)
-        # The droppers' interface columns, a row each: the pattern of the sparse B_c - c_m H in build
-        self.d_valid = np.arange(nc_max)[None, :] < modes["n_coupled"][reduced.span_type[d_span]][:, None]
-        self.d_cols = modes["coupled"][d_span][self.d_valid]
-        self.d_pointers = np.r_[0, np.cumsum(self.d_valid.sum(axis=1))]
         # Every span with its far modes; a configuration adds its near spans' differences.
         self.far = far = np.array([types[t].far_modes for t in reduced.span_type])
         n_b = reduced.interface.size
@@ -490,7 +491,7 @@ class _ConfigurationBuilder:
         # B_c - c_m H on the interface: a unit dropper force's right-hand side, ≤ n_c entries a row (sparse:
         # its products below then cost n_c, not n_b, multiply-adds an entry of theirs)
         out["dropper_interface_force"] = forces = self.d_c - c_m * dropper_h
-        H = sp.csr_matrix((forces[self.d_valid], self.d_cols, self.d_pointers), (forces.shape[0], n_b))
+        H = interface_forces(forces, self.d_span, reduced.span_type, self.n_coupled, self.coupled, n_b)
         # Each pantograph's span: S⁻¹ at its coupled interface DOFs (a band solve of each unit force) and
         # the droppers' elongations under them
         owns = [reduced.coupled[s] if s >= 0 else np.zeros(0, dtype=np.int64) for s in configuration]
@@ -522,19 +523,34 @@ def as_configuration_zero(built: dict[str, np.ndarray]) -> dict[str, np.ndarray]
     return {name: built[name][None] for name in ("kept", *CONFIGURATION_FIELDS)}
 
 
+def interface_forces(
+    forces: np.ndarray,
+    dropper_span: np.ndarray,
+    span_type: np.ndarray,
+    n_coupled: np.ndarray,
+    coupled: np.ndarray,
+    n_b: int,
+) -> sp.csr_matrix:
+    """B_c - c_m H (``forces``, (D, n_c) on each dropper's span's coupled interface DOFs ``coupled``) as a
+    sparse (D, n_b) matrix over the interface: ≤ n_c entries a row, so that its products cost n_c, not n_b,
+    multiply-adds an entry of theirs."""
+    valid = np.arange(forces.shape[1])[None, :] < n_coupled[span_type[dropper_span]][:, None]
+    pointers = np.r_[0, np.cumsum(valid.sum(axis=1))]
+    return sp.csr_matrix((forces[valid], coupled[dropper_span][valid], pointers), (forces.shape[0], n_b))
+
+
 def dropper_responses(d: SpanModeArrays, c: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The droppers' responses in configuration c, dense over the section: X = (B_c - c_m H) S⁻¹ (D, n_b),
     the interface's motion under a unit force at each dropper, and its flexibility G = (B_c - c_m H) S⁻¹
     (B_c - c_m H)ᵀ plus each span's own block, of the kept modes and with the residual (D, D): a dropper's
     elongations under a unit force at each. The numpy loop takes them whole as it enters a configuration;
     the compiled loop a slack dropper's row when it first needs it (its ``_dropper_row``, the same sums)."""
-    n_drop, n_b = d.dropper_span.size, d.schur_inverse_diagonal.shape[1]
-    forces = np.zeros((n_drop, n_b))
-    for q, s in enumerate(d.dropper_span):
-        nc = d.n_coupled[d.span_type[s]]
-        forces[q, d.coupled[s, :nc]] = d.dropper_interface_force[c, q, :nc]
-    X = sla.cho_solve_banded((d.schur_band[c], False), forces.T, check_finite=False)
-    modal = forces @ X
+    n_b = d.schur_inverse_diagonal.shape[1]
+    forces = interface_forces(
+        d.dropper_interface_force[c], d.dropper_span, d.span_type, d.n_coupled, d.coupled, n_b
+    )
+    X = sla.cho_solve_banded((d.schur_band[c], False), forces.T.toarray(), check_finite=False)
+    modal = np.asarray(forces @ X)
     full = modal.copy()
     for s in range(d.span_type.size):
         q = slice(d.dropper_start[s], d.dropper_start[s + 1])
