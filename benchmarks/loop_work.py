@@ -11,6 +11,14 @@ asks for, which no implementation of it does less of.
     python benchmarks/loop_work.py                              # benchmark catenary, 20 and 40 spans
     python benchmarks/loop_work.py --presets benchmark stitched --spans 20
     python benchmarks/loop_work.py --full                       # full passages, not as the studies run them
+    python benchmarks/loop_work.py --window 8 12                # what windows of spans would leave to do
+    python benchmarks/loop_work.py --window 8 12 --ahead        # ... windows on both sides of the pantograph
+
+With ``--window W``, each row also gives the modal multiply-adds a passage would count if it stepped only the
+spans at most W behind the pantograph's (``--ahead``: and at most W ahead of it, among those behind the wave
+front): what a window of spans would leave of the work, counted on the same passage (the passage itself is the
+model's, the window's numbers are not simulated), and the spans a step advances on average behind and ahead of
+the pantograph's (docs/performance.md, 'A window of spans, counted').
 
 The level design at 300 km/h and 170 N, one BLAS thread; medians over ``--runs`` passages in one process.
 """
@@ -20,6 +28,7 @@ from __future__ import annotations
 import argparse
 import statistics
 import time
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -35,14 +44,18 @@ COUNTS = ("multiply-adds", "modes", "droppers", "interface DOFs")
 class CountingLoop:
     """The compiled loop, wrapped: each call's time, and the work of the steps it takes."""
 
-    def __init__(self) -> None:
+    def __init__(self, windows: Sequence[int] = (), ahead: bool = False) -> None:
         self.kernel = passage.BACKENDS["numba"]()
+        self.windows = tuple(windows)
+        self.ahead = ahead
         self.reset()
 
     def reset(self) -> None:
         self.seconds = 0.0
         self.steps = 0
         self.work = dict.fromkeys(COUNTS, 0.0)
+        self.windowed = dict.fromkeys(self.windows, 0.0)  # multiply-adds left by each window
+        self.around = {"behind": 0.0, "ahead": 0.0}  # spans stepped behind and ahead of the pantograph's
 
     def __call__(self, d, points, state, configuration, stepped, first, stop) -> None:  # noqa: ANN001
         start = time.perf_counter()
@@ -60,6 +73,16 @@ class CountingLoop:
             self.work[name] += float(np.r_[0, np.cumsum(values)][spans].sum())
         self.work["interface DOFs"] += float(d.interface_end[spans - 1].sum())
         self.steps += spans.size
+        element = points[0].element[first:stop]
+        on = element >= 0  # the (first) pantograph on the section
+        span, stepped_on = d.element_span[element[on]], spans[on]
+        self.around["behind"] += float(span.sum())
+        self.around["ahead"] += float((stepped_on - span - 1).sum())
+        cumulative = np.r_[0, np.cumsum(per_span["multiply-adds"])]
+        for width in self.windows:
+            low = np.clip(span - width, 0, None)
+            high = np.minimum(stepped_on, span + width + 1) if self.ahead else stepped_on
+            self.windowed[width] += float((cumulative[high] - cumulative[low]).sum())
 
 
 def measure(loop: CountingLoop, preset: str, spans: int, full: bool, runs: int) -> dict:
@@ -75,6 +98,8 @@ def measure(loop: CountingLoop, preset: str, spans: int, full: bool, runs: int) 
         run(catenary, pantograph, level_design(catenary), 300 / 3.6, fidelity, 170.0)
         seconds.append(loop.seconds)
     row = {name: value / spans for name, value in loop.work.items()}
+    row.update({f"window {width}": value / spans for width, value in loop.windowed.items()})
+    row.update({f"spans {side}": value / loop.steps for side, value in loop.around.items()})
     row.update(steps=loop.steps, seconds=statistics.median(seconds) / spans)
     return row
 
@@ -85,8 +110,14 @@ def main() -> None:
     parser.add_argument("--spans", nargs="+", type=int, default=[20, 40], help="section lengths (20 40)")
     parser.add_argument("--full", action="store_true", help="full passages (not as the studies run them)")
     parser.add_argument("--runs", type=int, default=5, help="passages timed for each (default 5)")
+    parser.add_argument(
+        "--window", nargs="+", type=int, default=[], metavar="W", help="count windows of W spans behind"
+    )
+    parser.add_argument("--ahead", action="store_true", help="the windows on both sides of the pantograph")
     args = parser.parse_args()
-    loop = CountingLoop()
+    if any(width < 0 for width in args.window):
+        parser.error(f"--window: spans behind the pantograph's, 0 or more (got {args.window})")
+    loop = CountingLoop(args.window, args.ahead)
     passage.BACKENDS["numba"] = lambda: loop
     rows = {}
     with one_blas_thread():
@@ -96,11 +127,16 @@ def main() -> None:
                 counts = ", ".join(f"{name} {row[name]:,.0f}" for name in COUNTS)
                 print(
                     f"{preset}, {spans} spans, {'full passage' if args.full else 'as the studies run it'}: "
-                    f"{row['steps']:,} steps; per span: loop {row['seconds'] * 1e3:.2f} ms; work {counts}"
+                    f"{row['steps']:,} steps; per span: loop {row['seconds'] * 1e3:.2f} ms; work {counts}; "
+                    f"a step advances {row['spans behind']:.1f} spans behind the pantograph's and "
+                    f"{row['spans ahead']:.1f} ahead"
                 )
-    base = next(iter(rows))
+    names = COUNTS + tuple(f"window {width}" for width in args.window)
+    first = next(iter(rows))
     for key, row in list(rows.items())[1:]:
-        ratios = ", ".join(f"{name} {row[name] / rows[base][name]:.3f}" for name in COUNTS)
+        # a longer section against the same catenary's first, another catenary against the first one's
+        base = (key[0], args.spans[0]) if key[1] != args.spans[0] else first
+        ratios = ", ".join(f"{name} {row[name] / rows[base][name]:.3f}" for name in names)
         time_ratio = row["seconds"] / rows[base]["seconds"]
         against = f"{key[0]} {key[1]} against {base[0]} {base[1]}"
         print(f"{against}, per span: loop time {time_ratio:.3f}; work {ratios}")
