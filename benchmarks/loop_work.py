@@ -18,7 +18,8 @@ With ``--window W``, each row also gives the modal multiply-adds a passage would
 spans at most W behind the pantograph's (``--ahead``: and at most W ahead of it, among those behind the wave
 front): what a window of spans would leave of the work, counted on the same passage (the passage itself is the
 model's, the window's numbers are not simulated), and the spans a step advances on average behind and ahead of
-the pantograph's (docs/performance.md, 'A window of spans, counted').
+the pantograph's (docs/performance.md, 'A window of spans behind the pantograph, counted, made and dropped').
+A lower bound on the window's work, and not on its time: the loop's time does not fall in proportion.
 
 The level design at 300 km/h and 170 N, one BLAS thread; medians over ``--runs`` passages in one process.
 """

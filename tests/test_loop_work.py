@@ -1,5 +1,6 @@
-"""The loop-work benchmark's counts (benchmarks/loop_work.py; docs/performance.md, 'A window of spans,
-counted'): a window as wide as the section leaves all the work, and a narrower one less."""
+"""The loop-work benchmark's counts (benchmarks/loop_work.py; docs/performance.md, 'A window of spans behind
+the pantograph, counted, made and dropped'): a window as wide as the section leaves all the work, and a
+narrower one less."""
 
 from __future__ import annotations
 
