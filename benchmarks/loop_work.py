@@ -70,8 +70,9 @@ class CountingLoop:
             "modes": kept,
             "droppers": droppers,
         }
-        for name, values in per_span.items():
-            self.work[name] += float(np.r_[0, np.cumsum(values)][spans].sum())
+        cumulative = {name: np.r_[0, np.cumsum(values)] for name, values in per_span.items()}
+        for name, summed in cumulative.items():
+            self.work[name] += float(summed[spans].sum())
         self.work["interface DOFs"] += float(d.interface_end[spans - 1].sum())
         self.steps += spans.size
         element = points[0].element[first:stop]
@@ -79,11 +80,11 @@ class CountingLoop:
         span, stepped_on = d.element_span[element[on]], spans[on]
         self.around["behind"] += float(span.sum())
         self.around["ahead"] += float((stepped_on - span - 1).sum())
-        cumulative = np.r_[0, np.cumsum(per_span["multiply-adds"])]
+        products = cumulative["multiply-adds"]
         for width in self.windows:
             low = np.clip(span - width, 0, None)
             high = np.minimum(stepped_on, span + width + 1) if self.ahead else stepped_on
-            self.windowed[width] += float((cumulative[high] - cumulative[low]).sum())
+            self.windowed[width] += float((products[high] - products[low]).sum())
 
 
 def measure(loop: CountingLoop, preset: str, spans: int, full: bool, runs: int) -> dict:
