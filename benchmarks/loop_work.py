@@ -13,6 +13,7 @@ asks for, which no implementation of it does less of.
     python benchmarks/loop_work.py --full                       # full passages, not as the studies run them
     python benchmarks/loop_work.py --window 8 12                # what windows of spans would leave to do
     python benchmarks/loop_work.py --window 8 12 --ahead        # ... windows on both sides of the pantograph
+    python benchmarks/loop_work.py --horizon 200                # ... a hold behind that waits for causality
 
 With ``--window W``, each row also gives the modal multiply-adds a passage would count if it stepped only the
 spans at most W behind the pantograph's (``--ahead``: and at most W ahead of it, among those behind the wave
@@ -20,6 +21,11 @@ front): what a window of spans would leave of the work, counted on the same pass
 model's, the window's numbers are not simulated), and the spans a step advances on average behind and ahead of
 the pantograph's (docs/performance.md, 'A window of spans behind the pantograph, counted, made and dropped').
 A lower bound on the window's work, and not on its time: the loop's time does not fall in proportion.
+
+With ``--horizon M``, the count of a hold that changes nothing the pantograph meets: a span is left out once
+what it sends forward, at the wave front's speed c, could reach the pantograph only after the passage has
+ended, with M metres to spare (the spans behind the pantograph's span's start by more than (c - v) times the
+passage's time left, plus M; docs/performance.md, 'A hold behind the pantograph that waits for causality').
 
 The level design at 300 km/h and 170 N, one BLAS thread; medians over ``--runs`` passages in one process.
 """
@@ -35,6 +41,7 @@ import numpy as np
 
 from catenary_env.blas_threads import one_blas_thread
 from catenary_env.dynamics.span_modes import passage
+from catenary_env.dynamics.span_modes.passage import front_speed
 from catenary_env.model.design import level_design
 from catenary_env.model.presets import load_catenary, load_pantograph
 from catenary_env.pipeline import Fidelity, evaluate, simulate
@@ -45,10 +52,14 @@ COUNTS = ("multiply-adds", "modes", "droppers", "interface DOFs")
 class CountingLoop:
     """The compiled loop, wrapped: each call's time, and the work of the steps it takes."""
 
-    def __init__(self, windows: Sequence[int] = (), ahead: bool = False) -> None:
+    def __init__(
+        self, windows: Sequence[int] = (), ahead: bool = False, horizons: Sequence[float] = ()
+    ) -> None:
         self.kernel = passage.BACKENDS["numba"]()
         self.windows = tuple(windows)
         self.ahead = ahead
+        self.horizons = tuple(horizons)
+        self.passage = (0.0, 0.0, 0.0, 0.0)  # span length (m), speed, front speed (m/s), time step (s)
         self.reset()
 
     def reset(self) -> None:
@@ -56,6 +67,7 @@ class CountingLoop:
         self.steps = 0
         self.work = dict.fromkeys(COUNTS, 0.0)
         self.windowed = dict.fromkeys(self.windows, 0.0)  # multiply-adds left by each window
+        self.held = dict.fromkeys(self.horizons, 0.0)  # ... by each causal hold
         self.around = {"behind": 0.0, "ahead": 0.0}  # spans stepped behind and ahead of the pantograph's
 
     def __call__(self, d, points, state, configuration, stepped, first, stop) -> None:  # noqa: ANN001
@@ -85,6 +97,12 @@ class CountingLoop:
             low = np.clip(span - width, 0, None)
             high = np.minimum(stepped_on, span + width + 1) if self.ahead else stepped_on
             self.windowed[width] += float((products[high] - products[low]).sum())
+        span_length, speed, front, time_step = self.passage
+        time_left = (points[0].element.size - 1 - np.arange(first, stop)[on]) * time_step
+        for margin in self.horizons:  # spans ending this far behind the pantograph's span's start are held
+            reach = span * span_length - (front - speed) * time_left - margin
+            low = np.minimum(np.floor(reach / span_length).clip(0).astype(np.int64), stepped_on)
+            self.held[margin] += float((products[stepped_on] - products[low]).sum())
 
 
 def measure(loop: CountingLoop, preset: str, spans: int, full: bool, runs: int) -> dict:
@@ -92,6 +110,7 @@ def measure(loop: CountingLoop, preset: str, spans: int, full: bool, runs: int) 
     catenary = load_catenary(preset)
     pantograph = load_pantograph(catenary.pantograph)
     fidelity = Fidelity(n_spans=spans, analysis_spans=spans // 2)
+    loop.passage = (catenary.span_length, 300 / 3.6, front_speed(catenary), fidelity.time_step)
     run = simulate if full else evaluate
     run(catenary, pantograph, level_design(catenary), 300 / 3.6, fidelity, 170.0)  # compiled, warmed
     seconds = []
@@ -101,6 +120,7 @@ def measure(loop: CountingLoop, preset: str, spans: int, full: bool, runs: int) 
         seconds.append(loop.seconds)
     row = {name: value / spans for name, value in loop.work.items()}
     row.update({f"window {width}": value / spans for width, value in loop.windowed.items()})
+    row.update({f"horizon {margin:g}": value / spans for margin, value in loop.held.items()})
     row.update({f"spans {side}": value / loop.steps for side, value in loop.around.items()})
     row.update(steps=loop.steps, seconds=statistics.median(seconds) / spans)
     return row
@@ -116,10 +136,15 @@ def main() -> None:
         "--window", nargs="+", type=int, default=[], metavar="W", help="count windows of W spans behind"
     )
     parser.add_argument("--ahead", action="store_true", help="the windows on both sides of the pantograph")
+    parser.add_argument(
+        "--horizon", nargs="+", type=float, default=[], metavar="M", help="count causal holds, M m to spare"
+    )
     args = parser.parse_args()
     if any(width < 0 for width in args.window):
         parser.error(f"--window: spans behind the pantograph's, 0 or more (got {args.window})")
-    loop = CountingLoop(args.window, args.ahead)
+    if any(margin < 0 for margin in args.horizon):
+        parser.error(f"--horizon: metres to spare, 0 or more (got {args.horizon})")
+    loop = CountingLoop(args.window, args.ahead, args.horizon)
     passage.BACKENDS["numba"] = lambda: loop
     rows = {}
     with one_blas_thread():
@@ -134,6 +159,7 @@ def main() -> None:
                     f"{row['spans ahead']:.1f} ahead"
                 )
     names = COUNTS + tuple(f"window {width}" for width in args.window)
+    names += tuple(f"horizon {margin:g}" for margin in args.horizon)
     first = next(iter(rows))
     for key, row in list(rows.items())[1:]:
         # a longer section against the same catenary's first, another catenary against the first one's

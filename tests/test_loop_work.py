@@ -29,3 +29,18 @@ def test_a_window_as_wide_as_the_section_counts_all_the_work(monkeypatch, ahead)
     assert all(a < b for a, b in zip(counts, counts[1:], strict=False))  # each span further adds its work
     # a step advances the pantograph's span and those behind and ahead of it, at most the section
     assert 1.0 <= 1.0 + row["spans behind"] + row["spans ahead"] <= SPANS
+
+
+def test_a_hold_that_waits_for_causality_counts_less_the_less_it_spares(monkeypatch):
+    """A hold with more metres to spare than the section is long holds nothing; with fewer, it holds more
+    spans, and only towards the passage's end, where the time left is short."""
+    pytest.importorskip("numba")
+    monkeypatch.syspath_prepend(str(ROOT / "benchmarks"))
+    loop_work = importlib.import_module("loop_work")
+    margins = (1e6, 100.0, 0.0)
+    loop = loop_work.CountingLoop(horizons=margins)
+    monkeypatch.setitem(passage.BACKENDS, "numba", lambda: loop)
+    row = loop_work.measure(loop, "benchmark", SPANS, full=True, runs=1)
+    counts = [row[f"horizon {margin:g}"] for margin in margins]
+    assert counts[0] == row["multiply-adds"] > 0
+    assert counts[0] > counts[1] > counts[2] > 0
