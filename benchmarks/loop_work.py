@@ -110,13 +110,14 @@ def measure(loop: CountingLoop, preset: str, spans: int, full: bool, runs: int) 
     catenary = load_catenary(preset)
     pantograph = load_pantograph(catenary.pantograph)
     fidelity = Fidelity(n_spans=spans, analysis_spans=spans // 2)
-    loop.passage = (catenary.span_length, 300 / 3.6, front_speed(catenary), fidelity.time_step)
+    speed = 300 / 3.6
+    loop.passage = (catenary.span_length, speed, front_speed(catenary), fidelity.time_step)
     run = simulate if full else evaluate
-    run(catenary, pantograph, level_design(catenary), 300 / 3.6, fidelity, 170.0)  # compiled, warmed
+    run(catenary, pantograph, level_design(catenary), speed, fidelity, 170.0)  # compiled, warmed
     seconds = []
     for _ in range(runs):
         loop.reset()
-        run(catenary, pantograph, level_design(catenary), 300 / 3.6, fidelity, 170.0)
+        run(catenary, pantograph, level_design(catenary), speed, fidelity, 170.0)
         seconds.append(loop.seconds)
     row = {name: value / spans for name, value in loop.work.items()}
     row.update({f"window {width}": value / spans for width, value in loop.windowed.items()})
