@@ -51,27 +51,24 @@ from catenary_env.dynamics.exact import kernel_preparation as preparation  # noq
 from catenary_env.dynamics.linear_system import linearise  # noqa: E402
 from catenary_env.dynamics.models import DYNAMIC_MODELS  # noqa: E402
 from catenary_env.dynamics.protocol import Passage  # noqa: E402
-from catenary_env.fem.layout import Layout, build_layout  # noqa: E402
+from catenary_env.fem.layout import build_layout  # noqa: E402
 from catenary_env.model.definition import CatenaryDefinition  # noqa: E402
 from catenary_env.model.design import level_design, presag_design  # noqa: E402
 from catenary_env.model.presets import load_catenary, load_pantograph  # noqa: E402
 from catenary_env.pipeline import Fidelity, analysis_window, evaluate, evaluate_speeds_unchecked  # noqa: E402
-from catenary_env.statics.shape_finding import find_shape  # noqa: E402
+from catenary_env.statics.equal_spans import find_equal_spans_shape  # noqa: E402
+from catenary_env.statics.shape_finding import StaticSolution  # noqa: E402
 from catenary_env.train import SINGLE, Train  # noqa: E402
 
 PHASES = ("shape_finding", "linearisation", "preparation", "passage", "statistics")
 MODELS = ("span-modes", "exact")
 
 
-def level_layout(catenary: CatenaryDefinition, n_spans: int, fidelity: Fidelity) -> Layout:
-    """The level design's layout on ``fidelity``'s mesh."""
-    return build_layout(
-        catenary,
-        level_design(catenary),
-        n_spans,
-        fidelity.contact_wire_element,
-        fidelity.messenger_wire_element,
-    )
+def level_static(catenary: CatenaryDefinition, n_spans: int, fidelity: Fidelity) -> StaticSolution:
+    """The level design's static shape on ``fidelity``'s mesh, found as an evaluation finds it."""
+    elements = (fidelity.contact_wire_element, fidelity.messenger_wire_element)
+    layout = build_layout(catenary, level_design(catenary), n_spans, *elements)
+    return find_equal_spans_shape(layout, *elements)
 
 
 class _Phases:
@@ -97,7 +94,7 @@ def one_evaluation(
     catenary = load_catenary(preset)
     pantograph = load_pantograph(catenary.pantograph)
     phases = _Phases()
-    static = find_shape(level_layout(catenary, n_spans, fidelity))
+    static = level_static(catenary, n_spans, fidelity)
     phases.lap("shape_finding")
     system = linearise(static)
     phases.lap("linearisation")
@@ -206,7 +203,7 @@ def backend_comparison(
     """Passage times of both backends on one prepared system, alternately; medians and their ratio."""
     catenary = load_catenary(preset)
     pantograph = load_pantograph(catenary.pantograph)
-    system = linearise(find_shape(level_layout(catenary, n_spans, fidelity)))
+    system = linearise(level_static(catenary, n_spans, fidelity))
     prepared = exact.prepare(system, fidelity)
     times: dict[str, list[float]] = {"numba": [], "numpy": []}
     forces = {}
@@ -238,7 +235,7 @@ def solve_floor(preset: str, n_spans: int, fidelity: Fidelity, calls: int = 200)
         from catenary_env.dynamics.exact import kernels
     except ImportError:
         return None
-    system = linearise(find_shape(level_layout(load_catenary(preset), n_spans, fidelity)))
+    system = linearise(level_static(load_catenary(preset), n_spans, fidelity))
     factor = exact.prepare(system, fidelity).factor
     w = preparation.padded_width(factor.bandwidth)
     unit = preparation.unit_factor(factor.factor, w)

@@ -36,6 +36,7 @@ from .model.definition import CatenaryDefinition, DefinitionError, PantographDef
 from .model.design import Design, DesignError, check_design, check_speed
 from .model.presets import load_acceptance
 from .model.tolerances import SectionDeviations, check_deviations
+from .statics.equal_spans import find_equal_spans_shape
 from .statics.shape_finding import ShapeFindingError, StaticSolution, find_shape
 from .train import SINGLE, Train, objective_sigma
 
@@ -298,14 +299,10 @@ def _find_static(
     fidelity: Fidelity,
     deviations: SectionDeviations | None = None,
 ) -> StaticSolution:
-    layout = build_layout(
-        catenary,
-        design,
-        fidelity.n_spans,
-        fidelity.contact_wire_element,
-        fidelity.messenger_wire_element,
-        deviations,
-    )
+    elements = (fidelity.contact_wire_element, fidelity.messenger_wire_element)
+    layout = build_layout(catenary, design, fidelity.n_spans, *elements, deviations)
+    if deviations is None:  # equal spans
+        return find_equal_spans_shape(layout, *elements)
     return find_shape(layout)
 
 

@@ -14,7 +14,6 @@ from catenary_env.model.tolerances import Tolerances, draw_deviations
 from catenary_env.problems import PROBLEMS
 from catenary_env.problems.speeds import SpeedsEvaluation
 from catenary_env.problems.tolerance import RobustObjective
-from catenary_env.statics import shape_finding
 
 SPEEDS = (200.0, 250.0)
 FORCES = (112.0, 133.0)  # N, about the calibrated ones: given, so that nothing is calibrated
@@ -37,8 +36,8 @@ def test_each_speed_equals_its_own_evaluation_and_the_statics_is_found_once(
     problem = PROBLEMS["B1"]
     alone = [problem.evaluate(X, v, fidelity, f) for v, f in zip(SPEEDS, FORCES, strict=True)]
     found = []
-    real = shape_finding.find_shape
-    monkeypatch.setattr(pipeline, "find_shape", lambda *a, **k: found.append(1) or real(*a, **k))
+    real = pipeline._find_static
+    monkeypatch.setattr(pipeline, "_find_static", lambda *a, **k: found.append(1) or real(*a, **k))
     together = problem.evaluate_speeds(X, SPEEDS, fidelity, FORCES)
     assert isinstance(together, SpeedsEvaluation) and together.speeds_kmh == SPEEDS
     assert len(found) == 1
@@ -89,7 +88,7 @@ def test_bad_input_is_refused_for_every_speed_before_any_solve(monkeypatch: pyte
     def no_solve(*args: object, **kwargs: object) -> None:
         raise AssertionError("solved before the input was checked")
 
-    monkeypatch.setattr(pipeline, "find_shape", no_solve)
+    monkeypatch.setattr(pipeline, "_find_static", no_solve)
     problem = PROBLEMS["B1"]
     with pytest.raises(ValueError, match="km/h"):
         problem.evaluate_speeds([0.0] * 5, (300.0, 500.0), "test", (150.0, 150.0))  # above the wave speed

@@ -173,7 +173,7 @@ def _subdivide(keys: np.ndarray, max_length: float) -> np.ndarray:
     return np.r_[keys[0], a[interval] + (b - a)[interval] * i / n[interval]]
 
 
-def _find(node_x: np.ndarray, nodes: np.ndarray, x: np.ndarray) -> np.ndarray:
+def nodes_at(node_x: np.ndarray, nodes: np.ndarray, x: np.ndarray) -> np.ndarray:
     """The node among ``nodes`` (in order of x) that stands at each ``x``, to a micrometre."""
     at = node_x[nodes]
     i = np.clip(np.searchsorted(at, np.asarray(x) - 1e-6), 0, at.size - 1)
@@ -245,7 +245,8 @@ def build_layout(
         np.flatnonzero(node_kind == kind) for kind in (CONTACT, MESSENGER, STITCH)
     )
     options = c.modelling
-    hinges = _find(node_x, mw_nodes, interior) if options.messenger_support == "hinge" else np.zeros(0, int)
+    hinged = options.messenger_support == "hinge"
+    hinges = nodes_at(node_x, mw_nodes, interior) if hinged else np.zeros(0, int)
     sizes = np.where(node_kind == STITCH, 2, 4)
     sizes[hinges] = 6
     node_dof = np.concatenate([[0], np.cumsum(sizes)[:-1]])
@@ -269,18 +270,18 @@ def build_layout(
 
     # Bars: the droppers (top, bottom) in dropper order, then three bars per stitch wire.
     top = np.empty(dropper_x.size, dtype=int)
-    top[on_stitch] = _find(node_x, st_nodes, dropper_x[on_stitch])
-    top[~on_stitch] = _find(node_x, mw_nodes, dropper_x[~on_stitch])
-    dropper_nodes = np.c_[top, _find(node_x, cw_nodes, dropper_x)]
+    top[on_stitch] = nodes_at(node_x, st_nodes, dropper_x[on_stitch])
+    top[~on_stitch] = nodes_at(node_x, mw_nodes, dropper_x[~on_stitch])
+    dropper_nodes = np.c_[top, nodes_at(node_x, cw_nodes, dropper_x)]
     n_drop = dropper_x.size
     stitch_nodes = np.zeros((0, 2), dtype=int)
     stitch_ea = stitch_rho = math.nan
     if stitch is not None:
         chain = np.c_[
-            _find(node_x, mw_nodes, interior - half),
-            _find(node_x, st_nodes, dropper_x.reshape(n_spans, n_d)[:-1, -1]),
-            _find(node_x, st_nodes, dropper_x.reshape(n_spans, n_d)[1:, 0]),
-            _find(node_x, mw_nodes, interior + half),
+            nodes_at(node_x, mw_nodes, interior - half),
+            nodes_at(node_x, st_nodes, dropper_x.reshape(n_spans, n_d)[:-1, -1]),
+            nodes_at(node_x, st_nodes, dropper_x.reshape(n_spans, n_d)[1:, 0]),
+            nodes_at(node_x, mw_nodes, interior + half),
         ]
         stitch_nodes = np.stack([chain[:, :-1], chain[:, 1:]], axis=2).reshape(-1, 2)
         stitch_ea, stitch_rho = stitch.axial_stiffness, stitch.linear_mass
@@ -303,8 +304,8 @@ def build_layout(
     cable_dof_table = np.hstack(
         [start[:, :1] + [0, 1], (start[:, 0] + right_side)[:, None] + [0, 1], start[:, 1:] + [0, 1, 2, 3]]
     )
-    mw_supports = _find(node_x, mw_nodes, support_x)
-    cw_supports = _find(node_x, cw_nodes, support_x)
+    mw_supports = nodes_at(node_x, mw_nodes, support_x)
+    cw_supports = nodes_at(node_x, cw_nodes, support_x)
     mass_nodes = np.r_[bars[drop, 0], bars[drop, 1], cw_supports, mw_supports]
     point = 0.0 if distributed else 1.0  # distributed clamps and steady arms are in the wires' mass
     mass_values = np.r_[

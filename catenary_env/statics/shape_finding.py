@@ -326,7 +326,11 @@ class ShapeEquations:
 
 
 def find_shape(
-    layout: Layout, tolerance: float = 1e-8, max_iterations: int = 30, chord: bool = True
+    layout: Layout,
+    tolerance: float = 1e-8,
+    max_iterations: int = 30,
+    chord: bool = True,
+    start: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> StaticSolution:
     """Solve the shape-finding problem of ``layout`` by Newton–Raphson.
 
@@ -349,6 +353,10 @@ def find_shape(
     chord : bool
         Reuse the last factorisation in Newton's quadratic phase (above); False: a Jacobian every
         iteration.
+    start : (ndarray, ndarray), optional
+        Coordinates (m) and reference lengths (m) to start Newton from; default :func:`initial_guess`.
+        A section of equal spans starts from a short section's solution
+        (:func:`~catenary_env.statics.equal_spans.find_equal_spans_shape`).
 
     Raises
     ------
@@ -357,7 +365,7 @@ def find_shape(
     """
     c = layout.catenary
     equations = ShapeEquations(layout)
-    y = equations.unknowns(*initial_guess(layout))
+    y = equations.unknowns(*(initial_guess(layout) if start is None else start))
     n_free = equations.n_free
     scale = max(c.contact_wire.tension, c.messenger_wire.tension)
     history: list[float] = []
