@@ -23,6 +23,14 @@ def test_static_json_gives_dropper_lengths_and_forces(capsys):
     out = json.loads(capsys.readouterr().out)
     assert out["feasible"] and len(out["dropper_lengths"]) == 9
     assert sum(out["dropper_forces"]) > 600.0  # the span's contact wire weighs about 730 N
+    assert out["start_spans"] == 0  # 5 spans: from the parabolic start
+
+
+def test_static_says_a_long_section_was_started_from_a_short_one(capsys):
+    """docs/model.md, 'Shape-finding': the Newton iterations counted are the section's, after its start."""
+    assert main(["static", "benchmark", "--fidelity", "test", "--spans", "16"]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert "16 spans" in first and "11 spans solved first, then 0 Newton iterations" in first
 
 
 def test_simulate_json_gives_the_statistics(capsys):

@@ -33,6 +33,7 @@ def test_a_section_started_from_a_short_one_reaches_the_same_equilibrium(name, r
         parabolic = find_shape(layout)
         replicated = find_equal_spans_shape(layout, *ELEMENTS)
         history = np.array(replicated.residual_history)
+        assert (replicated.start_spans, parabolic.start_spans) == (2 * END_SPANS + 1, 0)
         assert history[-1] < 1e-8 * replicated.load_scale
         # The start is within a Newton step of the equilibrium (its copies of the interior span were already
         # interior to some 1e-8): at most one step instead of the parabolic start's four or five.
@@ -104,5 +105,5 @@ def test_a_short_section_that_fails_leaves_the_section_its_own_newton(benchmark_
     monkeypatch.setattr(equal_spans, "find_shape", failing_short)
     layout = build_layout(benchmark_catenary, level_design(benchmark_catenary), SPANS, *ELEMENTS)
     static = find_equal_spans_shape(layout, *ELEMENTS)
-    assert len(static.residual_history) > 2  # from the parabola
+    assert len(static.residual_history) > 2 and static.start_spans == 0  # from the parabola
     assert np.array_equal(static.positions, find_shape(layout).positions)

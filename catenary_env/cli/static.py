@@ -112,6 +112,7 @@ def _record(
         },
         "residual": static.residual_history[-1],
         "newton_iterations": len(static.residual_history) - 1,
+        "start_spans": static.start_spans,
         "wall_time": elapsed,
         "units": UNITS,
     }
@@ -126,9 +127,11 @@ def _record(
 
 def _text(result: dict[str, Any], design: Design, profiles: list[StiffnessProfile]) -> str:
     """The result as text: feasibility, wire tensions, the droppers of the central span, the stiffness."""
+    short = result["start_spans"]
+    start = f"{short} spans solved first, then " if short else ""
     lines = [
         f"{result['preset']}: {result['n_spans']} spans, shape found in {result['wall_time']:.2f} s "
-        f"({result['newton_iterations']} Newton iterations, residual {result['residual']:.1e} N)",
+        f"({start}{result['newton_iterations']} Newton iterations, residual {result['residual']:.1e} N)",
         "feasible" if result["feasible"] else f"INFEASIBLE: {result['reason']}",
     ]
     for wire, (low, high) in result["wire_tension_range"].items():

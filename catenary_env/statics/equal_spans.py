@@ -13,6 +13,8 @@ same equilibrium, reached in zero or one Newton steps of the section instead of 
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from ..fem.layout import Layout, build_layout, nodes_at
@@ -38,9 +40,11 @@ def find_equal_spans_shape(
             layout.catenary, layout.design, n_short, contact_wire_element, messenger_wire_element
         )
         try:
-            return find_shape(layout, start=replicated_start(layout, find_shape(short)))
+            solution = find_shape(layout, start=replicated_start(layout, find_shape(short)))
         except ShapeFindingError:
             pass
+        else:
+            return dataclasses.replace(solution, start_spans=n_short)
     return find_shape(layout)
 
 

@@ -64,9 +64,12 @@ class StaticSolution:
         Forces the supports and anchors exert where an equation was replaced by a prescribed
         coordinate (support springs, steady arms, wire anchors), N; zero elsewhere.
     residual_history : tuple of float
-        Infinity norm of the equilibrium residual at each Newton iteration, N.
+        Infinity norm of the equilibrium residual at the start and after each Newton iteration, N.
     load_scale : float
         Largest wire tension, N; residuals are judged relative to it.
+    start_spans : int
+        Spans of the shorter section whose solution Newton started from
+        (:mod:`~catenary_env.statics.equal_spans`); 0 where it started from the parabolic start.
     """
 
     layout: Layout
@@ -76,6 +79,7 @@ class StaticSolution:
     reactions: np.ndarray
     residual_history: tuple[float, ...]
     load_scale: float
+    start_spans: int = 0
 
     @property
     def dropper_forces(self) -> np.ndarray:
