@@ -288,21 +288,25 @@ def settle_in_place(  # noqa: C901
             new_contact[p] = g > 0.0
             changed = changed or new_contact[p] != contact[p]
         for q in range(n_drop):
-            dl = dl_known[q]
-            for p in range(n_c):
-                dl += g_dc[p, q] * f[p]
-            elastic[q] = dl
+            elastic[q] = dl_known[q]
+        for p in range(n_c):
+            fp = f[p]
+            row = g_dc[p]
+            for q in range(n_drop):
+                elastic[q] += row[q] * fp
         # G is symmetric (to rounding): the slack droppers' rows, each read along, not their columns, whose
         # every entry lies on a cache line of its own (docs/performance.md, 'Speed').
         for i in range(m):
             row = G[idx[i]]
             for q in range(n_drop):
                 elastic[q] += row[q] * lam[i]
+        switched = 0  # an integer sum, not a logical or, so that the loop vectorises
         for q in range(n_drop):
-            elastic[q] = N0[q] + kappa[q] * elastic[q] - rate_term[q]  # spring plus damping share
-            new_slack[q] = elastic[q] < 0.0
-            changed = changed or new_slack[q] != slack[q]
-        if not changed:
+            force = N0[q] + kappa[q] * elastic[q] - rate_term[q]  # spring plus damping share
+            elastic[q] = force
+            new_slack[q] = force < 0.0
+            switched += new_slack[q] != slack[q]
+        if not changed and switched == 0:
             return m, True, -1
         missing = False  # a dropper gone slack whose row of G is not ready
         if iteration < FULL_SWITCH_ITERATIONS:  # as switch_states

@@ -502,10 +502,14 @@ def run_steps(d, points, st, configuration, stepped, first, stop):  # pragma: no
         # 2. Droppers' elongations of u_known = K̂⁻¹ M e + y.
         for q in range(n_ds):
             sd = d.dropper_span[q]
-            td = d.span_type[sd]
-            nc = d.n_coupled[td]
-            acc = dl_known[q] + _dot(d.dropper_h[c, q], g_c[sd], nc) + _dot(d.dropper_c[q], x_c[sd], nc)
-            dl_known[q] = acc + g1 * st.Bu[q] + g2 * st.Bv[q] + g3 * st.Ba[q]
+            nc = d.n_coupled[d.span_type[sd]]
+            hd, cd, g_s, x_s = d.dropper_h[c, q], d.dropper_c[q], g_c[sd], x_c[sd]
+            acc = 0.0
+            for j in range(nc):  # one sum, one horizontal reduction
+                acc += hd[j] * g_s[j] + cd[j] * x_s[j]
+            dl_known[q] += acc
+        for q in range(n_ds):  # apart, so that it vectorises
+            dl_known[q] += g1 * st.Bu[q] + g2 * st.Bv[q] + g3 * st.Ba[q]
             rate_term[q] = beta * d.droppers.rate[q] * (a1 * st.Bu[q] + a4 * st.Bv[q] + a5 * st.Ba[q])
         for i in range(n_c):
             for j in range(n_c):
@@ -581,10 +585,11 @@ def run_steps(d, points, st, configuration, stepped, first, stop):  # pragma: no
         i_s = n_q + n_bs
         advance(u[n_q:i_s], v[n_q:i_s], acc_s[n_q:i_s], e_vec[n_q:i_s], y[n_q:i_s], x_b[:n_bs], cf)
         for q in range(n_ds):
-            bu = dl_known[q]
-            for p in range(n_c):
-                bu += gm_dc[p, q] * f[p]
-            b_new[q] = bu
+            b_new[q] = dl_known[q]
+        for p in range(n_c):  # by rows, so that it vectorises
+            fp, row = f[p], gm_dc[p]
+            for q in range(n_ds):
+                b_new[q] += row[q] * fp
         for qq in range(n_slack):  # symmetric: rows, as in settle_in_place
             _axpy(g_modal_rows[idx[qq]], lam[qq], b_new, n_ds)
         for q in range(n_ds):
