@@ -587,9 +587,7 @@ def run_steps(d, points, st, configuration, stepped, first, stop):  # pragma: no
         for q in range(n_ds):
             b_new[q] = dl_known[q]
         for p in range(n_c):  # by rows, so that it vectorises
-            fp, row = f[p], gm_dc[p]
-            for q in range(n_ds):
-                b_new[q] += row[q] * fp
+            _axpy(gm_dc[p], f[p], b_new, n_ds)
         for qq in range(n_slack):  # symmetric: rows, as in settle_in_place
             _axpy(g_modal_rows[idx[qq]], lam[qq], b_new, n_ds)
         for q in range(n_ds):
