@@ -378,6 +378,16 @@ def test_submatrix_equals_scipy_indexing(system):
     assert np.array_equal(reduction.submatrix(K, rows, cols).toarray(), K[rows][:, cols].toarray())
 
 
+def test_band_width_of_a_dense_matrix_is_that_of_its_non_zero_entries():
+    rng = np.random.default_rng(7)
+    for _ in range(500):
+        shape = rng.integers(1, 9, size=2)
+        A = np.where(rng.random(shape) < 0.3, rng.standard_normal(shape), 0.0)
+        i, j = np.nonzero(A)
+        expected = int(np.max(np.abs(i - j), initial=0))
+        assert reduction.band_width(A) == expected == reduction.band_width(sp.csr_matrix(A))
+
+
 def test_the_parity_basis_products_are_the_sparse_basis_ones(system):
     """Qᵀ X and Q v by gathering rows are a sparse Q's products, to the last bit."""
     mirror = _own_mirror(system, 2)
@@ -398,6 +408,48 @@ def test_the_parity_basis_products_are_the_sparse_basis_ones(system):
         assert np.array_equal(basis.project(basis.project(K).T), Qt @ (Qt @ K).T)
         v = np.random.default_rng(4).standard_normal((Q.shape[1], Q.shape[1]))
         assert np.array_equal(basis.expand(v), Q @ v)
+
+
+@pytest.mark.parametrize("span", [0, 2])
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_eigensolution_through_the_mass_band_is_lapack_s_generalised_one(
+    system, span, compiled, monkeypatch
+):
+    """M's Cholesky factor kept banded, then the standard eigensolution (docs/performance.md, 'The span types'
+    eigensolutions through the mass matrix's band'): the eigenvalues of dsygvd, every residual and the
+    M-orthonormality at rounding, with the band solves compiled or LAPACK's."""
+    if compiled:
+        pytest.importorskip("numba")
+    else:
+        monkeypatch.setattr(reduction, "_band_kernels", lambda: None)
+    dofs = reduction.split_spans(system)[0][span]
+    K, M = (x.tocsr()[dofs][:, dofs].toarray() for x in (system.stiffness, system.mass))
+    omega2, shapes = reduction.generalised_eigh(K, M)
+    expected = sla.eigh(K, M, eigvals_only=True)
+    np.testing.assert_allclose(omega2, expected, rtol=0, atol=1e-13 * expected.max())
+    assert np.abs(K @ shapes - (M @ shapes) * omega2).max() < 1e-12 * np.abs(K).max()
+    np.testing.assert_allclose(shapes.T @ M @ shapes, np.eye(dofs.size), rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("transposed", [True, False])
+def test_the_compiled_band_solves_are_lapack_s(transposed, monkeypatch):
+    """The row-wise substitutions (numba) solve U x = b or Uᵀ x = b as LAPACK's dtbtrs does, and leave the
+    right-hand sides as they were."""
+    pytest.importorskip("numba")
+    rng = np.random.default_rng(6)
+    n, width = 50, 4
+    M = sum(np.diag(rng.uniform(-1.0, 1.0, n - k), k) for k in range(1, width + 1))
+    M = M + M.T + np.diag(rng.uniform(2.0 * width, 3.0 * width, n))  # diagonally dominant: SPD
+    factor = reduction.upper_band(M)
+    U = np.triu(sla.cholesky(M))
+    rows = rng.standard_normal((n, 13))
+    given = rows.copy()
+    compiled = reduction._solve_factor(factor, rows, transposed)
+    monkeypatch.setattr(reduction, "_band_kernels", lambda: None)
+    lapack_s = reduction._solve_factor(factor, rows, transposed)
+    np.testing.assert_allclose(compiled, lapack_s, rtol=0, atol=1e-14 * np.abs(lapack_s).max())
+    np.testing.assert_allclose((U.T if transposed else U) @ compiled, rows, rtol=0, atol=1e-13)
+    assert np.array_equal(rows, given)
 
 
 def _tree_walk_signs(i, j, a, b, n):

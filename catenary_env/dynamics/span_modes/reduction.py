@@ -29,10 +29,12 @@ exact one; the cut-off is the only approximation.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from types import ModuleType
 
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
+from scipy.linalg import lapack
 from scipy.sparse.csgraph import breadth_first_order
 
 from ..linear_system import LinearSystem
@@ -248,9 +250,14 @@ def band_width(matrix: np.ndarray | sp.spmatrix | SparseRows) -> int:
     if isinstance(matrix, SparseRows) or sp.issparse(matrix):
         coo = matrix if isinstance(matrix, SparseRows) else matrix.tocoo()
         rows, cols = coo.row[coo.data != 0.0], coo.col[coo.data != 0.0]
-    else:
-        rows, cols = np.nonzero(matrix)
-    return int(np.max(np.abs(rows - cols), initial=0))
+        return int(np.max(np.abs(rows - cols), initial=0))
+    # Dense: each row's first and last non-zero column (argmax finds the first True), without listing every
+    # non-zero entry as np.nonzero does (a third of a millisecond for a span's 356 × 356).
+    nonzero = matrix != 0.0
+    rows = np.flatnonzero(nonzero.any(axis=1))
+    first = np.argmax(nonzero[rows], axis=1)
+    last = matrix.shape[1] - 1 - np.argmax(nonzero[rows, ::-1], axis=1)
+    return int(max(np.max(rows - first, initial=0), np.max(last - rows, initial=0)))
 
 
 def band_storage(matrix: np.ndarray, width: int | None = None) -> np.ndarray:
@@ -266,6 +273,41 @@ def upper_band(matrix: np.ndarray, width: int | None = None) -> np.ndarray:
     """The upper Cholesky factor of a banded SPD matrix, in LAPACK band storage; width: its own by
     default (at least the matrix's)."""
     return sla.cholesky_banded(band_storage(matrix, width), check_finite=False)
+
+
+def generalised_eigh(K: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """All eigenpairs (ω² ascending, M-normalised Φ) of K φ = ω² M φ, K symmetric, M banded SPD.
+
+    LAPACK's generalised solver (``dsygvd``) in three steps, with M's Cholesky factor M = Uᵀ U kept banded:
+    C = U⁻ᵀ K U⁻¹, the standard eigensolution C = Y Λ Yᵀ (``dsyevd``), Φ = U⁻¹ Y. ``dsygvd`` factors M
+    densely and forms C and Φ with dense triangular products, a third of its time at a span's size; the
+    banded solves cost n² w (docs/performance.md, 'The span types' eigensolutions through the mass matrix's
+    band').
+    """
+    factor = upper_band(M)
+    C = _solve_factor(factor, _solve_factor(factor, K, transposed=True).T, transposed=True)
+    omega2, Y = sla.eigh(C, driver="evd", overwrite_a=True, check_finite=False)
+    return omega2, _solve_factor(factor, Y, transposed=False)
+
+
+def _solve_factor(factor: np.ndarray, rows: np.ndarray, transposed: bool) -> np.ndarray:
+    """U⁻ᵀ rows (``transposed``) or U⁻¹ rows, for U in LAPACK's upper band storage (:func:`upper_band`):
+    by rows where numba is installed, else a column at a time (``dtbtrs``)."""
+    kernels = _band_kernels()
+    if kernels is None:
+        return lapack.dtbtrs(factor, rows, uplo="U", trans="T" if transposed else "N")[0]
+    solved = np.array(rows, order="C")
+    kernels.solve_upper_in_place(factor, solved, transposed)
+    return solved
+
+
+def _band_kernels() -> ModuleType | None:
+    """:mod:`catenary_env.dynamics.span_modes.band_kernels`, or None where numba is not installed."""
+    try:
+        from . import band_kernels
+    except ImportError:
+        return None
+    return band_kernels
 
 
 @dataclass(frozen=True)
@@ -385,12 +427,12 @@ def _eigensolution(
     pairs of mirror DOFs (e_i ± σ_i e_j) / √2, and the DOFs on the mirror plane alone.
     """
     if mirror is None or np.any(mirror.sign * mirror.sign[mirror.source] != 1.0):  # P² = I
-        return sla.eigh(K_ii, M_ii, driver="gvd", check_finite=False)
+        return generalised_eigh(K_ii, M_ii)
     omega2, shapes = [], []
     for parity in (1.0, -1.0):
         basis = _ParityBasis.of(mirror, parity)
         K_pp, M_pp = (basis.project(basis.project(x).T) for x in (K_ii, M_ii))
-        w, v = sla.eigh(K_pp, M_pp, driver="gvd", check_finite=False)
+        w, v = generalised_eigh(K_pp, M_pp)
         omega2.append(w)
         shapes.append(basis.expand(v))
     order = np.argsort(np.concatenate(omega2), kind="stable")
