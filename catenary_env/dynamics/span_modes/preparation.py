@@ -444,6 +444,9 @@ class _ConfigurationBuilder:
                 self.residual_block[s, k] = residual.dropper_block(reduced, s, near=k == types[t].n_modes)
         # Every span with its far modes; a configuration adds its near spans' differences.
         self.far = far = np.array([types[t].far_modes for t in reduced.span_type])
+        # Each dropper's span's coupled interface DOFs, and which of its n_c columns are some (the rest 0)
+        self.dropper_coupled = self.coupled[d_span]
+        self.dropper_valid = np.arange(nc_max)[None, :] < self.n_coupled[reduced.span_type[d_span]][:, None]
         n_b = reduced.interface.size
         self.far_sum = np.zeros((n_b, n_b))
         self.far_h = np.zeros((n_drop, nc_max))
@@ -491,19 +494,21 @@ class _ConfigurationBuilder:
         # B_c - c_m H on the interface: a unit dropper force's right-hand side, ≤ n_c entries a row (sparse:
         # its products below then cost n_c, not n_b, multiply-adds an entry of theirs)
         out["dropper_interface_force"] = forces = self.d_c - c_m * dropper_h
-        H = interface_forces(forces, self.d_span, reduced.span_type, self.n_coupled, self.coupled, n_b)
+        forces = np.where(self.dropper_valid, forces, 0.0)
         # Each pantograph's span: S⁻¹ at its coupled interface DOFs (a band solve of each unit force) and
-        # the droppers' elongations under them
+        # the droppers' elongations under them, (B_c - c_m H) S⁻¹ a dropper's n_c entries at a time
         owns = [reduced.coupled[s] if s >= 0 else np.zeros(0, dtype=np.int64) for s in configuration]
         nc_max = self.d_c.shape[1]
         out["element_interface"] = np.zeros((len(owns), nc_max, n_b))
-        out["dropper_element_interface"] = np.zeros((len(owns), nc_max, H.shape[0]))
+        out["dropper_element_interface"] = np.zeros((len(owns), nc_max, forces.shape[0]))
         for p, own in enumerate(owns):
             unit = np.zeros((n_b, own.size))
             unit[own, np.arange(own.size)] = 1.0
             columns = sla.cho_solve_banded((factor, False), unit, check_finite=False)
             out["element_interface"][p, : own.size] = columns.T
-            out["dropper_element_interface"][p, : own.size] = (H @ columns).T
+            out["dropper_element_interface"][p, : own.size] = np.einsum(
+                "qj,qjk->kq", forces, columns[self.dropper_coupled]
+            )
         # Each span's droppers' blocks of G (a near span's of its near modes)
         blocks = self.far_blocks.copy()
         for s in near:
