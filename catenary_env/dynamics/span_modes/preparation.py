@@ -297,7 +297,17 @@ class _Residuals:
     and with the far modes, on the internal DOFs where forces act ("selected": the contact wire's z
     DOFs and the droppers' ends), the near modes' own Φ D⁻¹ Φᵀ there, and each span's droppers as
     rows over those DOFs. R is the truncated eigenpairs' own sum Φ_t D_t⁻¹ Φ_tᵀ (the span's
-    eigenvectors diagonalise K̂_ii), without a solve and without the cancellation of a difference."""
+    eigenvectors diagonalise K̂_ii), without a solve and without the cancellation of a difference.
+
+    Each compliance is kept as its factor F (C = F Fᵀ, :data:`COMPLIANCES`), and only the entries that are
+    used are formed: the droppers' blocks B C Bᵀ, C Bᵀ, and each contact-wire element's 4 × 4 block. The
+    whole C over the selected DOFs (some 270 of a span's 410 DOFs) cost 270² multiply-adds a mode, a
+    millisecond a span type (docs/performance.md, 'The span types' eigensolutions through the mass matrix's
+    band')."""
+
+    COMPLIANCES = ("near", "far", "modal")
+    """R with the near modes (F = Φ_t D_t^-½), R with the far modes (the near modes above the far cut-off
+    added to F), and the near modes' own Φ D⁻¹ Φᵀ (F = Φ D^-½)."""
 
     def __init__(self, reduced: ReducedSystem, c_k: float, c_m: float, d_span: np.ndarray) -> None:
         system = reduced.system
@@ -311,19 +321,20 @@ class _Residuals:
         self.interface_position = np.full(system.n_dofs, -1, dtype=np.int64)
         self.interface_position[reduced.interface] = np.arange(reduced.interface.size)
         z_dofs = system.contact_wire.z_dofs.ravel()
-        self.selected, self.modal, self.near, self.far = [], [], [], []
+        self.selected: list[np.ndarray] = []
+        self.factors: dict[str, list[np.ndarray]] = {name: [] for name in self.COMPLIANCES}
+        entry_row = np.repeat(np.arange(B.shape[0]), np.diff(B.indptr))  # each stored entry's dropper
         for t, modes in enumerate(reduced.types):
             spans_t = np.flatnonzero(reduced.span_type == t)
-            dofs = np.r_[z_dofs, B[np.isin(d_span, spans_t)].indices]
+            dofs = np.r_[z_dofs, B.indices[np.isin(d_span, spans_t)[entry_row]]]  # B's rows' DOFs, in order
             sel = np.unique(self.local_of[dofs[np.isin(self.span_of[dofs], spans_t)]])
-            phi = modes.shapes[sel] / np.sqrt(c_k * modes.omega2 + c_m)
+            phi = modes.shapes[sel]
+            phi /= np.sqrt(c_k * modes.omega2 + c_m)  # in place, not a second (sel, m) array
             rest = modes.truncated_shapes[sel] / np.sqrt(c_k * modes.truncated_omega2 + c_m)
-            k = modes.far_modes
-            above_far = phi[:, k:] @ phi[:, k:].T  # the near modes' share, which a far span drops
             self.selected.append(sel)
-            self.modal.append(phi[:, :k] @ phi[:, :k].T + above_far)
-            self.near.append(rest @ rest.T)
-            self.far.append(self.near[-1] + above_far)
+            self.factors["near"].append(rest)
+            self.factors["far"].append(np.hstack([rest, phi[:, modes.far_modes :]]))  # what a far span drops
+            self.factors["modal"].append(phi)
         # A span whose rows equal its type's first span's (every interior span: the same droppers on the
         # same DOFs) stands for it in the products with them, made once (``of_rows``): ``rows_of``.
         self.span_droppers, self.rows_of, first = [], np.arange(n_spans), {}
@@ -340,6 +351,7 @@ class _Residuals:
             first.setdefault(t, s)
             self.span_droppers.append(rows)
         self._products: dict[tuple[str, int], np.ndarray] = {}
+        self._element_blocks: dict[tuple[str, int, bytes], np.ndarray] = {}
 
     def of_rows(self, reduced: ReducedSystem, span: int, name: str, make) -> np.ndarray:  # noqa: ANN001
         """``make(rows, t)`` of the span's dropper rows and type t, made once for the spans whose rows are
@@ -351,12 +363,34 @@ class _Residuals:
 
     def dropper_block(self, reduced: ReducedSystem, span: int, near: bool) -> np.ndarray:
         """The span's droppers' residual flexibility B R Bᵀ, m/N."""
+        name = "near" if near else "far"
+
+        def make(rows: np.ndarray, t: int) -> np.ndarray:
+            rows_f = rows @ self.factors[name][t]
+            return rows_f @ rows_f.T
+
+        return self.of_rows(reduced, span, f"block {name}", make)
+
+    def to_droppers(self, reduced: ReducedSystem, span: int, name: str) -> np.ndarray:
+        """C Bᵀ (selected DOFs, the span's droppers) of the compliance ``name``, m/N."""
         return self.of_rows(
             reduced,
             span,
-            f"block {near}",
-            lambda rows, t: rows @ (self.near[t] if near else self.far[t]) @ rows.T,
+            f"to droppers {name}",
+            lambda rows, t: self.factors[name][t] @ (rows @ self.factors[name][t]).T,
         )
+
+    def element_blocks(self, t: int, positions: np.ndarray, name: str) -> np.ndarray:
+        """(E, 4, 4): the compliance ``name`` of type t between each element's 4 DOFs, ``positions`` (E, 4)
+        in the type's selected DOFs (-1: an interface DOF, whose entries are 0), made once for a type's
+        spans whose elements lie alike."""
+        key = (name, t, positions.tobytes())
+        if key not in self._element_blocks:
+            rows = self.factors[name][t][np.maximum(positions, 0)]  # (E, 4, r)
+            inside = positions >= 0
+            blocks = rows @ rows.transpose(0, 2, 1)
+            self._element_blocks[key] = np.where(inside[:, :, None] & inside[:, None, :], blocks, 0.0)
+        return self._element_blocks[key]
 
 
 def kept_modes(reduced: ReducedSystem, near_spans: int, configuration: tuple[int, ...]) -> np.ndarray:
@@ -605,20 +639,17 @@ def _element_arrays(
         t = reduced.span_type[s]
         where = np.full(reduced.types[t].shapes.shape[0], -1)
         where[residual.selected[t]] = np.arange(residual.selected[t].size)
-        R = residual.near[t]
         loc = np.where(el_local[els] >= 0, where[np.maximum(el_local[els], 0)], -1)
         ok = loc >= 0
         safe = np.maximum(loc, 0)
-        both = ok[:, :, None] & ok[:, None, :]
-        el_comp[els] = np.where(both, R[safe[:, :, None], safe[:, None, :]], 0.0)
-        el_modal[els] = np.where(both, residual.modal[t][safe[:, :, None], safe[:, None, :]], 0.0)
+        el_comp[els] = residual.element_blocks(t, loc, "near")
+        el_modal[els] = residual.element_blocks(t, loc, "modal")
         drops = np.flatnonzero(d_span == s)
         el_droppers[els, : drops.size] = drops
-        to_droppers = residual.of_rows(
-            reduced, s, "elements", lambda rows, t: (residual.near[t] @ rows.T, residual.modal[t] @ rows.T)
-        )
-        el_res[els, :, : drops.size] = np.where(ok[:, :, None], to_droppers[0][safe], 0.0)
-        el_drop_modal[els, :, : drops.size] = np.where(ok[:, :, None], to_droppers[1][safe], 0.0)
+        for out, name in ((el_res, "near"), (el_drop_modal, "modal")):
+            out[els, :, : drops.size] = np.where(
+                ok[:, :, None], residual.to_droppers(reduced, s, name)[safe], 0.0
+            )
     return dict(
         element_span=el_span,
         element_local=el_local,
