@@ -480,7 +480,7 @@ class _ConfigurationBuilder:
         self.far = far = np.array([types[t].far_modes for t in reduced.span_type])
         # Each dropper's span's coupled interface DOFs, and which of its n_c columns are some (the rest 0)
         self.dropper_coupled = self.coupled[d_span]
-        self.dropper_valid = np.arange(nc_max)[None, :] < self.n_coupled[reduced.span_type[d_span]][:, None]
+        self.dropper_valid = _coupled_columns(d_span, reduced.span_type, self.n_coupled, nc_max)
         n_b = reduced.interface.size
         self.far_sum = np.zeros((n_b, n_b))
         self.far_h = np.zeros((n_drop, nc_max))
@@ -562,6 +562,13 @@ def as_configuration_zero(built: dict[str, np.ndarray]) -> dict[str, np.ndarray]
     return {name: built[name][None] for name in ("kept", *CONFIGURATION_FIELDS)}
 
 
+def _coupled_columns(
+    dropper_span: np.ndarray, span_type: np.ndarray, n_coupled: np.ndarray, n_c: int
+) -> np.ndarray:
+    """(D, n_c) bool: which of a dropper's n_c columns are its span's coupled interface DOFs (the rest 0)."""
+    return np.arange(n_c)[None, :] < n_coupled[span_type[dropper_span]][:, None]
+
+
 def interface_forces(
     forces: np.ndarray,
     dropper_span: np.ndarray,
@@ -573,7 +580,7 @@ def interface_forces(
     """B_c - c_m H (``forces``, (D, n_c) on each dropper's span's coupled interface DOFs ``coupled``) as a
     sparse (D, n_b) matrix over the interface: ≤ n_c entries a row, so that its products cost n_c, not n_b,
     multiply-adds an entry of theirs."""
-    valid = np.arange(forces.shape[1])[None, :] < n_coupled[span_type[dropper_span]][:, None]
+    valid = _coupled_columns(dropper_span, span_type, n_coupled, forces.shape[1])
     pointers = np.r_[0, np.cumsum(valid.sum(axis=1))]
     return sp.csr_matrix((forces[valid], coupled[dropper_span][valid], pointers), (forces.shape[0], n_b))
 
